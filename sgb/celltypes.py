@@ -1,0 +1,63 @@
+"""Neurons grouped into cell types, and type tables expanded to full weight arrays.
+
+Cell types are contiguous, balanced blocks of neurons. When ``n`` is not a
+multiple of ``k`` the first ``n % k`` types get one neuron more.
+"""
+
+from collections.abc import Sequence
+
+import jax.numpy as jnp
+import numpy as np
+
+
+def _check_counts(n: int, k: int, n_name: str = "n", k_name: str = "k") -> None:
+    if int(n) != n or n <= 0:
+        raise ValueError(f"{n_name} must be a positive integer, got {n!r}")
+    if int(k) != k or k <= 0:
+        raise ValueError(f"{k_name} must be a positive integer, got {k!r}")
+    if k > n:
+        raise ValueError(f"{k_name}={k} cell types is more than the {n_name}={n} neurons")
+
+
+def type_sizes(n: int, k: int) -> np.ndarray:
+    """Neurons per cell type, shape (k,): balanced, remainder to the first types."""
+    _check_counts(n, k)
+    sizes = np.full(k, n // k, dtype=np.int64)
+    sizes[: n % k] += 1
+    return sizes
+
+
+def assign_cell_types(n: int, k: int) -> np.ndarray:
+    """Cell type of each of ``n`` neurons, shape (n,), values in [0, k), non-decreasing."""
+    return np.repeat(np.arange(k), type_sizes(n, k))
+
+
+def expand_table(table: jnp.ndarray, shape: Sequence[int]) -> jnp.ndarray:
+    """Expand a type table to a full array of the given shape.
+
+    ``table`` has one axis per axis of ``shape`` with ``table.shape[i]`` cell
+    types along axis ``i`` (e.g. (k_in, k_out) -> (n_in, n_out), or a 4-D conv
+    kernel table (k_h, k_w, k_cin, k_cout) -> (h, w, c_in, c_out)). Entry
+    ``[a, b, ...]`` of the result is ``table[type(a), type(b), ...]``.
+    """
+    shape = tuple(int(s) for s in shape)
+    if table.ndim != len(shape):
+        raise ValueError(
+            f"table has {table.ndim} axes but shape {shape} has {len(shape)}; they must match"
+        )
+    out = table
+    for axis, (k, n) in enumerate(zip(table.shape, shape, strict=True)):
+        _check_counts(n, k, f"shape[{axis}]", f"table.shape[{axis}]")
+        out = jnp.take(out, assign_cell_types(n, k), axis=axis)
+    return out
+
+
+def block_counts(shape: Sequence[int], types: Sequence[int]) -> np.ndarray:
+    """Synapses per type-table entry, shape ``types``: how often each entry is expanded."""
+    if len(shape) != len(types):
+        raise ValueError(f"shape {tuple(shape)} and types {tuple(types)} must have equal length")
+    counts = np.ones((), dtype=np.int64)
+    for axis, (n, k) in enumerate(zip(shape, types, strict=True)):
+        _check_counts(n, k, f"shape[{axis}]", f"types[{axis}]")
+        counts = np.multiply.outer(counts, type_sizes(n, k))
+    return counts

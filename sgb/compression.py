@@ -1,0 +1,53 @@
+"""Parameter counts and compression ratios, one definition for every model.
+
+compression ratio = parameters of the uncompressed network
+                    / parameters that define the compressed one.
+The uncompressed network counts weights and biases. The SGB counts its means,
+its rhos and its per-neuron biases; the DGB counts its g-net weights.
+"""
+
+from collections.abc import Sequence
+from typing import Any
+
+import jax
+import numpy as np
+
+
+def _check_sizes(sizes: Sequence[int]) -> None:
+    if len(sizes) < 2:
+        raise ValueError(f"sizes needs at least an input and an output layer, got {sizes}")
+    if any(int(n) != n or n <= 0 for n in sizes):
+        raise ValueError(f"sizes must be positive integers, got {sizes}")
+
+
+def dense_param_count(sizes: Sequence[int]) -> int:
+    """Weights and biases of a plain MLP with layer sizes e.g. (784, 800, 10)."""
+    _check_sizes(sizes)
+    return int(sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:], strict=True)))
+
+
+def sgb_param_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> int:
+    """Means, rhos and biases of an SGB MLP; ``cell_types`` as in ``SGBMLP``."""
+    _check_sizes(sizes)
+    if len(cell_types) != len(sizes):
+        raise ValueError(f"cell_types {cell_types} must have one entry per layer of {sizes}")
+    types = [n if k is None else k for n, k in zip(sizes, cell_types, strict=True)]
+    for n, k in zip(sizes, types, strict=True):
+        if not 0 < k <= n:
+            raise ValueError(f"cell types must lie in [1, {n}] for a layer of {n}, got {k}")
+    return int(sum(2 * a * b + n for a, b, n in zip(types[:-1], types[1:], sizes[1:], strict=True)))
+
+
+def tree_param_count(params: Any) -> int:
+    """Number of scalars in a parameter pytree."""
+    return int(sum(np.size(leaf) for leaf in jax.tree_util.tree_leaves(params)))
+
+
+def compression_ratio(uncompressed: int, compressed: int) -> float:
+    """Uncompressed over compressed parameter count."""
+    if uncompressed <= 0 or compressed <= 0:
+        raise ValueError(
+            f"parameter counts must be positive, got uncompressed={uncompressed}, "
+            f"compressed={compressed}"
+        )
+    return uncompressed / compressed

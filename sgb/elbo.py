@@ -1,0 +1,55 @@
+"""The evidence lower bound (negated, as a loss) for SGB models.
+
+loss = mean over S weight samples of the data term
+       + kl_weight * mean over S samples of the KL sown by the layers.
+
+The KL is weighted per training example (``kl_weight = kl_scale / n_train``),
+so the loss scale does not depend on the batch size.
+"""
+
+from collections.abc import Callable
+from typing import Any
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+import optax
+
+
+def sown_kl(state: dict) -> jnp.ndarray:
+    """Sum of every KL term the layers sowed into ``state["losses"]`` (nats)."""
+    leaves = jax.tree_util.tree_leaves(state.get("losses", {}))
+    return sum((jnp.sum(leaf) for leaf in leaves), jnp.zeros(()))
+
+
+def cross_entropy(logits: jnp.ndarray, labels: jnp.ndarray) -> jnp.ndarray:
+    """Mean softmax cross-entropy of integer labels, nats per example."""
+    return optax.softmax_cross_entropy_with_integer_labels(logits, labels).mean()
+
+
+def elbo_loss(
+    model: nn.Module,
+    params: Any,
+    x: jnp.ndarray,
+    y: jnp.ndarray,
+    key: jax.Array,
+    *,
+    num_samples: int,
+    kl_weight: float,
+    data_loss: Callable[[jnp.ndarray, jnp.ndarray], jnp.ndarray] = cross_entropy,
+) -> tuple[jnp.ndarray, dict]:
+    """Negative ELBO per training example and its parts ``{"data", "kl"}``.
+
+    ``num_samples`` (S) individuals are drawn with keys split from ``key``;
+    their data terms and KLs are averaged.
+    """
+    if num_samples < 1:
+        raise ValueError(f"num_samples must be >= 1, got {num_samples}")
+
+    def one_sample(sample_key):
+        outputs, state = model.apply(params, x, rngs={"sample": sample_key}, mutable=["losses"])
+        return data_loss(outputs, y), sown_kl(state)
+
+    data, kl = jax.vmap(one_sample)(jax.random.split(key, num_samples))
+    data, kl = data.mean(), kl.mean()
+    return data + kl_weight * kl, {"data": data, "kl": kl}

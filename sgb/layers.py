@@ -1,0 +1,192 @@
+"""SGB layers (Flax linen): a genome of per-type-pair means and spreads, sampled per synapse.
+
+A layer holds a type table ``mu`` and ``rho`` (sigma = softplus(rho)) and
+per-neuron biases. Each call draws every synapse's weight independently from
+its type pair's Gaussian, using the ``"sample"`` PRNG stream, or uses the
+means alone when ``mean_network=True``. The KL term of the layer is sown into
+the ``"losses"`` collection and the drawn kernel into ``"individual"``.
+
+With as many types as neurons the layer is a Bayes-by-backprop layer; with one
+type per side, one distribution for the whole layer.
+"""
+
+from collections.abc import Sequence
+from typing import Literal
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+
+from sgb.celltypes import block_counts, expand_table
+from sgb.priors import GaussianPrior, Prior
+
+KLCounting = Literal["synapse", "table"]
+
+
+def _check_types(name: str, types: int, neurons: int) -> None:
+    if types <= 0:
+        raise ValueError(f"{name} must be positive, got {types}")
+    if types > neurons:
+        raise ValueError(f"{name}={types} cell types is more than the {neurons} neurons")
+
+
+def genome_kl(
+    prior: Prior,
+    mu: jnp.ndarray,
+    sigma: jnp.ndarray,
+    kernel: jnp.ndarray,
+    counting: KLCounting,
+) -> jnp.ndarray:
+    """KL of one layer's genome to the prior, a scalar (nats).
+
+    ``mu``, ``sigma``: type tables; ``kernel``: the sampled full weights.
+    ``counting="synapse"`` sums the KL over every expanded synapse (as
+    Bayes by backprop does); ``"table"`` counts each type pair once (the genome
+    view: per pair, the mean of its synapses' Monte Carlo terms).
+    """
+    counts = jnp.asarray(block_counts(kernel.shape, mu.shape), dtype=kernel.dtype)
+    if isinstance(prior, GaussianPrior):
+        per_pair = prior.kl(mu, sigma)
+        return jnp.sum(per_pair * counts) if counting == "synapse" else jnp.sum(per_pair)
+    mu_full = expand_table(mu, kernel.shape)
+    sigma_full = expand_table(sigma, kernel.shape)
+    per_synapse = prior.kl(mu_full, sigma_full, kernel)
+    if counting == "synapse":
+        return jnp.sum(per_synapse)
+    return jnp.sum(per_synapse / expand_table(counts, kernel.shape))
+
+
+class _GenomeKernel(nn.Module):
+    """Samples a kernel of ``shape`` from a type table of ``types``; sows its KL."""
+
+    shape: tuple[int, ...]
+    types: tuple[int, ...]
+    prior: Prior
+    kl_counting: KLCounting
+    mean_init_std: float
+    rho_init: float
+
+    @nn.compact
+    def __call__(self, mean_network: bool) -> jnp.ndarray:
+        mu = self.param("mu", nn.initializers.normal(self.mean_init_std), self.types)
+        rho = self.param("rho", nn.initializers.constant(self.rho_init), self.types)
+        sigma = jax.nn.softplus(rho)
+        mu_full = expand_table(mu, self.shape)
+        if mean_network:
+            kernel = mu_full
+        else:
+            eps = jax.random.normal(self.make_rng("sample"), self.shape, mu.dtype)
+            kernel = mu_full + expand_table(sigma, self.shape) * eps
+            self.sow("losses", "kl", genome_kl(self.prior, mu, sigma, kernel, self.kl_counting))
+        self.sow("individual", "kernel", kernel)
+        return kernel
+
+
+class SGBDense(nn.Module):
+    """Dense layer (..., n_in) -> (..., features) with a (in_types, out_types) genome.
+
+    ``in_types``/``out_types`` of ``None`` mean one type per neuron.
+    ``mean_init_std`` is in units of 1/sqrt(n_in).
+    """
+
+    features: int
+    in_types: int | None = None
+    out_types: int | None = None
+    prior: Prior = GaussianPrior(0.1)
+    kl_counting: KLCounting = "synapse"
+    mean_init_std: float = 1.0
+    rho_init: float = -5.0
+
+    @nn.compact
+    def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+        n_in = x.shape[-1]
+        if self.features <= 0:
+            raise ValueError(f"features must be positive, got {self.features}")
+        k_in = n_in if self.in_types is None else self.in_types
+        k_out = self.features if self.out_types is None else self.out_types
+        _check_types("in_types", k_in, n_in)
+        _check_types("out_types", k_out, self.features)
+        kernel = _GenomeKernel(
+            shape=(n_in, self.features),
+            types=(k_in, k_out),
+            prior=self.prior,
+            kl_counting=self.kl_counting,
+            mean_init_std=self.mean_init_std / n_in**0.5,
+            rho_init=self.rho_init,
+            name="genome",
+        )(mean_network)
+        bias = self.param("bias", nn.initializers.zeros, (self.features,))
+        return x @ kernel + bias
+
+
+class SGBConv(nn.Module):
+    """2-D convolution, NHWC, with a 4-D genome: types along (height, width, c_in, c_out)."""
+
+    features: int
+    kernel_size: tuple[int, int]
+    types: tuple[int, int, int, int]
+    strides: tuple[int, int] = (1, 1)
+    padding: str = "SAME"
+    prior: Prior = GaussianPrior(0.1)
+    kl_counting: KLCounting = "synapse"
+    mean_init_std: float = 1.0
+    rho_init: float = -5.0
+
+    @nn.compact
+    def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+        shape = (*self.kernel_size, x.shape[-1], self.features)
+        names = ("height types", "width types", "input-channel types", "output-channel types")
+        if len(self.types) != 4:
+            raise ValueError(f"types must have 4 entries (h, w, c_in, c_out), got {self.types}")
+        for name, k, n in zip(names, self.types, shape, strict=True):
+            _check_types(name, k, n)
+        fan_in = shape[0] * shape[1] * shape[2]
+        kernel = _GenomeKernel(
+            shape=shape,
+            types=tuple(self.types),
+            prior=self.prior,
+            kl_counting=self.kl_counting,
+            mean_init_std=self.mean_init_std / fan_in**0.5,
+            rho_init=self.rho_init,
+            name="genome",
+        )(mean_network)
+        y = jax.lax.conv_general_dilated(
+            x, kernel, self.strides, self.padding, dimension_numbers=("NHWC", "HWIO", "NHWC")
+        )
+        bias = self.param("bias", nn.initializers.zeros, (self.features,))
+        return y + bias
+
+
+class SGBMLP(nn.Module):
+    """MLP of SGB layers with ReLU between them.
+
+    ``widths``: output width of each layer, e.g. (800, 10).
+    ``cell_types``: types of each neuron layer including the input, length
+    len(widths) + 1, e.g. (30, 64, 10); ``None`` entries mean one type per neuron.
+    """
+
+    widths: Sequence[int]
+    cell_types: Sequence[int | None]
+    prior: Prior = GaussianPrior(0.1)
+    kl_counting: KLCounting = "synapse"
+    rho_init: float = -5.0
+
+    @nn.compact
+    def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+        if len(self.cell_types) != len(self.widths) + 1:
+            raise ValueError(
+                f"cell_types needs {len(self.widths) + 1} entries (input and every layer), "
+                f"got {len(self.cell_types)}"
+            )
+        for i, width in enumerate(self.widths):
+            x = SGBDense(
+                width,
+                in_types=self.cell_types[i],
+                out_types=self.cell_types[i + 1],
+                prior=self.prior,
+                kl_counting=self.kl_counting,
+                rho_init=self.rho_init,
+            )(x, mean_network)
+            if i < len(self.widths) - 1:
+                x = nn.relu(x)
+        return x
