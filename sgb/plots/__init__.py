@@ -1,0 +1,36 @@
+"""Figures of the book: one shared style here, one module of figure functions per chapter."""
+
+import matplotlib as mpl
+import matplotlib.pyplot as plt
+
+PALETTE = {
+    "sgb": "#1f77b4",
+    "dgb": "#d62728",
+    "baseline": "#555555",
+    "mean_network": "#ff7f0e",
+    "individuals": "#2ca02c",
+}
+
+
+def apply_style() -> None:
+    """The book's matplotlib style: readable sizes, light grid, no top/right spines."""
+    mpl.rcParams.update(
+        {
+            "figure.dpi": 110,
+            "figure.figsize": (6.0, 4.0),
+            "axes.grid": True,
+            "grid.alpha": 0.3,
+            "axes.spines.top": False,
+            "axes.spines.right": False,
+            "axes.titlesize": 11,
+            "axes.labelsize": 10,
+            "legend.frameon": False,
+        }
+    )
+
+
+def subplots(*args, **kwargs):
+    """``plt.subplots`` with the book's style and a constrained layout."""
+    apply_style()
+    kwargs.setdefault("layout", "constrained")
+    return plt.subplots(*args, **kwargs)
