@@ -1,12 +1,29 @@
-"""Datasets as arrays. Offline: ``digits`` (scikit-learn) and ``mnist1d`` (generated in code)."""
+"""Datasets as arrays.
 
+Offline: ``digits`` (scikit-learn) and ``mnist1d`` (generated in code).
+Downloaded once and cached: ``mnist`` and ``cifar10``. Files are stored under
+``$SGB_DATA_DIR`` (default ``~/.cache/sgb``) and checked against their MD5
+checksums every time they are used; a missing, partial or corrupt file is
+downloaded again, never used.
+"""
+
+import gzip
+import hashlib
+import os
+import pickle
+import tarfile
+import urllib.error
+import urllib.request
+from collections.abc import Callable
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 
 class Dataset(NamedTuple):
-    """Train and test arrays; ``x`` float32 (n, features), ``y`` int32 (n,)."""
+    """Train and test arrays; ``x`` float32, (n, features) or images (n, height, width,
+    channels); ``y`` int32 (n,)."""
 
     name: str
     x_train: np.ndarray
@@ -16,9 +33,163 @@ class Dataset(NamedTuple):
     num_classes: int
 
 
-def _standardise(x_train: np.ndarray, x_test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    mean, std = x_train.mean(axis=0), x_train.std(axis=0) + 1e-6
+class RemoteFile(NamedTuple):
+    """A file to download: its name in the cache, mirror URLs tried in order, its MD5."""
+
+    name: str
+    urls: tuple[str, ...]
+    md5: str
+
+
+# MD5 sums as published with the files (and listed by torchvision's MNIST and CIFAR10 classes).
+_MNIST_MIRRORS = (
+    "https://ossci-datasets.s3.amazonaws.com/mnist/",
+    "http://yann.lecun.com/exdb/mnist/",
+)
+MNIST_FILES = {
+    split: RemoteFile(name, tuple(m + name for m in _MNIST_MIRRORS), md5)
+    for split, name, md5 in (
+        ("train_images", "train-images-idx3-ubyte.gz", "f68b3c2dcbeaaa9fbdd348bbdeb94873"),
+        ("train_labels", "train-labels-idx1-ubyte.gz", "d53e105ee54ea40749a09fcbcd1e9432"),
+        ("test_images", "t10k-images-idx3-ubyte.gz", "9fb629c4189551a2d022fa330f9573f3"),
+        ("test_labels", "t10k-labels-idx1-ubyte.gz", "ec29112dd5afa0611ce80d1b7f02629c"),
+    )
+}
+CIFAR10_FILE = RemoteFile(
+    "cifar-10-python.tar.gz",
+    ("https://www.cs.toronto.edu/~kriz/cifar-10-python.tar.gz",),
+    "c58f30108f718f92721af3b95e74349a",
+)
+OFFLINE_NAMES = ("digits", "mnist1d")
+
+
+def data_dir() -> Path:
+    """The cache directory: ``$SGB_DATA_DIR`` or ``~/.cache/sgb``."""
+    return Path(os.environ.get("SGB_DATA_DIR", Path.home() / ".cache" / "sgb")).expanduser()
+
+
+def md5sum(path: Path) -> str:
+    """Hex MD5 digest of a file."""
+    digest = hashlib.md5()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def download_url(url: str, path: Path) -> None:
+    """Download ``url`` to ``path`` (via a temporary file, so a broken transfer leaves none)."""
+    partial = path.with_name(path.name + ".part")
+    with urllib.request.urlopen(url, timeout=60) as response, open(partial, "wb") as f:
+        while chunk := response.read(1 << 20):
+            f.write(chunk)
+    partial.replace(path)
+
+
+def fetch(remote: RemoteFile, directory: Path | None = None) -> Path:
+    """Path of a verified local copy of ``remote``, downloading it if missing or corrupt.
+
+    Raises ``RuntimeError`` if no mirror gives a file with the right checksum;
+    the message names the offline datasets.
+    """
+    directory = data_dir() if directory is None else Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / remote.name
+    if path.exists() and md5sum(path) == remote.md5:
+        return path
+    errors = []
+    for url in remote.urls:
+        try:
+            download_url(url, path)
+        except (urllib.error.URLError, OSError, TimeoutError) as error:
+            errors.append(f"{url}: {error}")
+            continue
+        if md5sum(path) == remote.md5:
+            return path
+        errors.append(f"{url}: checksum mismatch")
+        path.unlink()
+    raise RuntimeError(
+        f"could not download {remote.name} into {directory} ({'; '.join(errors)}). "
+        f"Without internet use an offline dataset: {', '.join(OFFLINE_NAMES)}; "
+        "or place the file there yourself (set SGB_DATA_DIR to choose the directory)."
+    )
+
+
+def parse_idx(raw: bytes) -> np.ndarray:
+    """Parse an IDX file (the MNIST format: big-endian header, unsigned bytes) to an array."""
+    if len(raw) < 4 or raw[0] != 0 or raw[1] != 0 or raw[2] != 0x08:
+        raise ValueError("not an IDX file of unsigned bytes (magic number mismatch)")
+    ndim = raw[3]
+    shape = tuple(int.from_bytes(raw[4 + 4 * i : 8 + 4 * i], "big") for i in range(ndim))
+    data = np.frombuffer(raw, dtype=np.uint8, offset=4 + 4 * ndim)
+    if data.size != int(np.prod(shape)):
+        raise ValueError(f"IDX header says shape {shape} but the file holds {data.size} values")
+    return data.reshape(shape)
+
+
+def _read_idx_gz(path: Path) -> np.ndarray:
+    with gzip.open(path, "rb") as f:
+        return parse_idx(f.read())
+
+
+def parse_cifar10_tar(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(x_train, y_train, x_test, y_test) from CIFAR-10's python tarball; x uint8 NHWC."""
+
+    def batches(tar: tarfile.TarFile, names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+        xs, ys = [], []
+        for name in names:
+            member = tar.extractfile(f"cifar-10-batches-py/{name}")
+            if member is None:
+                raise ValueError(f"{path} has no batch {name}")
+            batch = pickle.load(member, encoding="bytes")
+            xs.append(np.asarray(batch[b"data"], np.uint8).reshape(-1, 3, 32, 32))
+            ys.append(np.asarray(batch[b"labels"], np.int32))
+        return np.concatenate(xs).transpose(0, 2, 3, 1), np.concatenate(ys)
+
+    with tarfile.open(path, "r:gz") as tar:
+        x_tr, y_tr = batches(tar, [f"data_batch_{i}" for i in range(1, 6)])
+        x_te, y_te = batches(tar, ["test_batch"])
+    return x_tr, y_tr, x_te, y_te
+
+
+def _standardise(
+    x_train: np.ndarray, x_test: np.ndarray, axis: int | tuple[int, ...] | None = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Shift and scale by the training set's mean and std along ``axis`` (None: global)."""
+    mean = x_train.mean(axis=axis)
+    std = x_train.std(axis=axis) + 1e-6
     return ((x_train - mean) / std).astype(np.float32), ((x_test - mean) / std).astype(np.float32)
+
+
+def mnist(seed: int = 0, directory: Path | None = None) -> Dataset:
+    """MNIST, 60k/10k 28x28 digits flattened to 784 features, standardised globally.
+
+    ``seed`` is unused (the split is fixed); it keeps the loaders' signatures alike.
+    """
+    del seed
+    arrays = {split: _read_idx_gz(fetch(f, directory)) for split, f in MNIST_FILES.items()}
+    x_tr = arrays["train_images"].reshape(len(arrays["train_images"]), -1).astype(np.float32)
+    x_te = arrays["test_images"].reshape(len(arrays["test_images"]), -1).astype(np.float32)
+    x_tr, x_te = _standardise(x_tr, x_te, axis=None)
+    return Dataset(
+        "mnist",
+        x_tr,
+        arrays["train_labels"].astype(np.int32),
+        x_te,
+        arrays["test_labels"].astype(np.int32),
+        10,
+    )
+
+
+def cifar10(seed: int = 0, directory: Path | None = None) -> Dataset:
+    """CIFAR-10, 50k/10k 32x32 RGB images (n, 32, 32, 3), standardised per channel.
+
+    ``seed`` is unused (the split is fixed); it keeps the loaders' signatures alike.
+    """
+    del seed
+    x_tr, y_tr, x_te, y_te = parse_cifar10_tar(fetch(CIFAR10_FILE, directory))
+    x_tr, x_te = _standardise(x_tr.astype(np.float32), x_te.astype(np.float32), axis=(0, 1, 2))
+    return Dataset("cifar10", x_tr, y_tr, x_te, y_te, 10)
 
 
 def digits(seed: int = 0, test_fraction: float = 0.25) -> Dataset:
@@ -55,11 +226,16 @@ def mnist1d(seed: int = 0, num_samples: int = 5000) -> Dataset:
     )
 
 
-OFFLINE_DATASETS = {"digits": digits, "mnist1d": mnist1d}
+OFFLINE_DATASETS: dict[str, Callable[..., Dataset]] = {"digits": digits, "mnist1d": mnist1d}
+DATASETS: dict[str, Callable[..., Dataset]] = {
+    **OFFLINE_DATASETS,
+    "mnist": mnist,
+    "cifar10": cifar10,
+}
 
 
 def load(name: str, seed: int = 0) -> Dataset:
-    """Load a dataset by name."""
-    if name not in OFFLINE_DATASETS:
-        raise ValueError(f"unknown dataset {name!r}; available: {sorted(OFFLINE_DATASETS)}")
-    return OFFLINE_DATASETS[name](seed=seed)
+    """Load a dataset by name: digits, mnist1d (offline), mnist, cifar10 (downloaded once)."""
+    if name not in DATASETS:
+        raise ValueError(f"unknown dataset {name!r}; available: {sorted(DATASETS)}")
+    return DATASETS[name](seed=seed)

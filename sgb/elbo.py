@@ -19,7 +19,7 @@ import optax
 def sown_kl(state: dict) -> jnp.ndarray:
     """Sum of every KL term the layers sowed into ``state["losses"]`` (nats)."""
     leaves = jax.tree_util.tree_leaves(state.get("losses", {}))
-    return sum((jnp.sum(leaf) for leaf in leaves), jnp.zeros(()))
+    return sum(leaves, jnp.zeros(()))
 
 
 def cross_entropy(logits: jnp.ndarray, labels: jnp.ndarray) -> jnp.ndarray:

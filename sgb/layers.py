@@ -4,7 +4,9 @@ A layer holds a type table ``mu`` and ``rho`` (sigma = softplus(rho)) and
 per-neuron biases. Each call draws every synapse's weight independently from
 its type pair's Gaussian, using the ``"sample"`` PRNG stream, or uses the
 means alone when ``mean_network=True``. The KL term of the layer is sown into
-the ``"losses"`` collection and the drawn kernel into ``"individual"``.
+the ``"losses"`` collection and the drawn kernel into ``"individual"`` (each
+apply replaces what an earlier one sowed). ``sgb.population.init_params``
+initialises a model's parameters alone.
 
 With as many types as neurons the layer is a Bayes-by-backprop layer; with one
 type per side, one distribution for the whole layer.
@@ -56,6 +58,11 @@ def genome_kl(
     return jnp.sum(per_synapse / expand_table(counts, kernel.shape))
 
 
+def _replace(_previous, new):
+    """Sow reducer that keeps only the latest value, so repeated applies never accumulate."""
+    return new
+
+
 class _GenomeKernel(nn.Module):
     """Samples a kernel of ``shape`` from a type table of ``types``; sows its KL."""
 
@@ -77,8 +84,9 @@ class _GenomeKernel(nn.Module):
         else:
             eps = jax.random.normal(self.make_rng("sample"), self.shape, mu.dtype)
             kernel = mu_full + expand_table(sigma, self.shape) * eps
-            self.sow("losses", "kl", genome_kl(self.prior, mu, sigma, kernel, self.kl_counting))
-        self.sow("individual", "kernel", kernel)
+            kl = genome_kl(self.prior, mu, sigma, kernel, self.kl_counting)
+            self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
+        self.sow("individual", "kernel", kernel, init_fn=lambda: None, reduce_fn=_replace)
         return kernel
 
 

@@ -15,6 +15,13 @@ import jax.numpy as jnp
 Params = Any
 
 
+def init_params(model: nn.Module, key: jax.Array, x: jnp.ndarray) -> Params:
+    """Initial ``{"params": ...}`` of ``model`` for inputs like ``x``, without sown state."""
+    init_key, sample_key = jax.random.split(key)
+    variables = model.init({"params": init_key, "sample": sample_key}, x)
+    return {"params": variables["params"]}
+
+
 @partial(jax.jit, static_argnums=0)
 def apply_individual(model: nn.Module, params: Params, x: jnp.ndarray, key: jax.Array):
     """Output of the individual drawn with ``key`` on inputs ``x``."""
@@ -41,6 +48,4 @@ def individual_kernels(
         _, state = model.apply(params, x, mean_network=True, mutable=["individual"])
     else:
         _, state = model.apply(params, x, rngs={"sample": key}, mutable=["individual"])
-    return jax.tree_util.tree_map(
-        lambda sown: sown[0], state["individual"], is_leaf=lambda v: isinstance(v, tuple)
-    )
+    return state["individual"]

@@ -13,7 +13,7 @@ from tqdm.auto import tqdm
 from sgb.data import Dataset
 from sgb.elbo import elbo_loss
 from sgb.layers import SGBMLP, KLCounting
-from sgb.population import apply_mean_network, apply_population
+from sgb.population import apply_mean_network, apply_population, init_params
 from sgb.priors import GaussianPrior, Prior
 
 
@@ -77,8 +77,8 @@ def train_classifier(
         )
     model = make_model(config, data.num_classes)
     key = jax.random.key(config.seed)
-    init_key, sample_key, key = jax.random.split(key, 3)
-    params = model.init({"params": init_key, "sample": sample_key}, data.x_train[:1])
+    init_key, key = jax.random.split(key)
+    params = init_params(model, init_key, data.x_train[:1])
     state = TrainState.create(
         apply_fn=model.apply, params=params, tx=optax.adam(config.learning_rate)
     )

@@ -1,0 +1,161 @@
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from sgb.celltypes import assign_cell_types
+from sgb.compression import tree_param_count
+from sgb.elbo import elbo_loss, sown_kl
+from sgb.layers import SGBMLP, SGBConv, SGBDense, genome_kl
+from sgb.population import (
+    apply_mean_network,
+    apply_population,
+    individual_kernels,
+    init_params,
+)
+from sgb.priors import GaussianPrior, ScaleMixturePrior
+
+
+def _init(model, x, seed=0):
+    return init_params(model, jax.random.key(seed), x)
+
+
+def test_sampled_weights_of_a_type_pair_have_the_tables_mean_and_sigma():
+    layer = SGBDense(120, in_types=3, out_types=4)
+    x = jnp.ones((1, 90))
+    params = _init(layer, x)
+    genome = params["params"]["genome"]
+    genome["mu"] = genome["mu"].at[1, 2].set(0.7)
+    genome["rho"] = genome["rho"].at[1, 2].set(jnp.log(jnp.expm1(0.25)))  # sigma = 0.25
+    kernel = individual_kernels(layer, params, x, jax.random.key(3))["genome"]["kernel"]
+    rows, cols = assign_cell_types(90, 3) == 1, assign_cell_types(120, 4) == 2
+    block = np.asarray(kernel)[np.ix_(rows, cols)].ravel()  # 30 * 30 = 900 synapses
+    n = block.size
+    assert abs(block.mean() - 0.7) < 4 * 0.25 / np.sqrt(n)
+    # the sample std of n normals has standard error sigma / sqrt(2(n-1))
+    assert abs(block.std(ddof=1) - 0.25) < 4 * 0.25 / np.sqrt(2 * (n - 1))
+
+
+def test_full_bnn_limit_has_independent_parameters_per_synapse():
+    layer = SGBDense(7, in_types=None, out_types=None)
+    params = _init(layer, jnp.ones((1, 5)))
+    genome = params["params"]["genome"]
+    assert genome["mu"].shape == (5, 7) and genome["rho"].shape == (5, 7)
+    assert tree_param_count(params) == 2 * 5 * 7 + 7
+    mean_kernel = individual_kernels(layer, params, jnp.ones((1, 5)), None)["genome"]["kernel"]
+    np.testing.assert_array_equal(mean_kernel, genome["mu"])
+    one_type = _init(SGBDense(7, in_types=1, out_types=1), jnp.ones((1, 5)))
+    assert tree_param_count(one_type) == 2 + 7
+
+
+def test_population_vmap_gives_distinct_individuals_and_keys_are_reproducible():
+    model = SGBMLP(widths=(16, 3), cell_types=(2, 4, 3))
+    x = jax.random.normal(jax.random.key(1), (8, 6))
+    params = _init(model, x)
+    keys = jax.random.split(jax.random.key(2), 100)
+    outputs = np.asarray(apply_population(model, params, x, keys))
+    assert outputs.shape == (100, 8, 3)
+    flat = outputs.reshape(100, -1)
+    distances = np.linalg.norm(flat[:, None] - flat[None], axis=-1)
+    assert np.all(distances[~np.eye(100, dtype=bool)] > 0)
+    again = np.asarray(apply_population(model, params, x, keys[:5]))
+    np.testing.assert_array_equal(again, outputs[:5])
+    single = np.asarray(model.apply(params, x, rngs={"sample": keys[7]}))
+    np.testing.assert_allclose(single, outputs[7], rtol=1e-5, atol=1e-6)
+
+
+def test_mean_network_makes_neurons_of_a_type_identical():
+    model = SGBMLP(widths=(12, 2), cell_types=(None, 3, 2))
+    x = jax.random.normal(jax.random.key(0), (4, 5))
+    params = _init(model, x)
+    _, hidden = model.apply(
+        params, x, mean_network=True, capture_intermediates=True, mutable=["intermediates"]
+    )
+    pre = np.asarray(hidden["intermediates"]["SGBDense_0"]["__call__"][0])
+    for t in range(3):
+        block = pre[:, assign_cell_types(12, 3) == t]
+        np.testing.assert_allclose(block, block[:, :1].repeat(block.shape[1], 1), atol=1e-6)
+    np.testing.assert_allclose(
+        apply_mean_network(model, params, x),
+        model.apply(params, x, mean_network=True),
+        rtol=1e-5,
+        atol=1e-6,
+    )
+
+
+@pytest.mark.parametrize("prior", [GaussianPrior(0.2), ScaleMixturePrior(0.5, 0.5, 0.01)])
+def test_kl_counting_synapse_is_block_size_times_table(prior):
+    mu = jnp.array([[0.1, -0.3]])
+    sigma = jnp.array([[0.05, 0.1]])
+    shape = (4, 6)  # one input type of 4 neurons, two output types of 3: 12 synapses per pair
+    if isinstance(prior, GaussianPrior):
+        kernel = jnp.zeros(shape)
+        synapse = genome_kl(prior, mu, sigma, kernel, "synapse")
+        table = genome_kl(prior, mu, sigma, kernel, "table")
+        assert float(synapse) == pytest.approx(12 * float(table), rel=1e-5)
+    else:
+        # a kernel whose every synapse in a block has the same value: the mean equals each term
+        kernel = jnp.repeat(jnp.repeat(mu + sigma, 4, 0), 3, 1)
+        synapse = genome_kl(prior, mu, sigma, kernel, "synapse")
+        table = genome_kl(prior, mu, sigma, kernel, "table")
+        assert float(synapse) == pytest.approx(12 * float(table), rel=1e-5)
+
+
+def test_elbo_averages_the_data_term_over_samples():
+    model = SGBMLP(widths=(8, 3), cell_types=(2, 2, 3), prior=ScaleMixturePrior())
+    x = jax.random.normal(jax.random.key(0), (10, 4))
+    y = jnp.arange(10) % 3
+    params = _init(model, x)
+    key = jax.random.key(5)
+    loss, parts = elbo_loss(model, params, x, y, key, num_samples=4, kl_weight=0.01)
+    datas, kls = [], []
+    for k in jax.random.split(key, 4):
+        logits, state = model.apply(params, x, rngs={"sample": k}, mutable=["losses"])
+        datas.append(-jax.nn.log_softmax(logits)[jnp.arange(10), y].mean())
+        kls.append(sown_kl(state))
+    assert float(parts["data"]) == pytest.approx(float(np.mean(datas)), rel=1e-5)
+    assert float(parts["kl"]) == pytest.approx(float(np.mean(kls)), rel=1e-5)
+    assert float(loss) == pytest.approx(np.mean(datas) + 0.01 * np.mean(kls), rel=1e-5)
+    assert len({round(float(d), 6) for d in datas}) == 4
+
+
+def test_conv_layer_kernel_follows_its_four_d_genome():
+    layer = SGBConv(features=6, kernel_size=(3, 3), types=(1, 3, 2, 3))
+    x = jnp.ones((1, 5, 5, 4))
+    params = _init(layer, x)
+    assert params["params"]["genome"]["mu"].shape == (1, 3, 2, 3)
+    y = layer.apply(params, x, rngs={"sample": jax.random.key(0)})
+    assert y.shape == (1, 5, 5, 6)
+    kernel = individual_kernels(layer, params, x, None)["genome"]["kernel"]
+    assert kernel.shape == (3, 3, 4, 6)
+    np.testing.assert_array_equal(kernel[0], kernel[2])  # one height type: rows share means
+
+
+@pytest.mark.parametrize(
+    ("layer", "shape", "match"),
+    [
+        (SGBDense(4, in_types=6), (1, 5), "in_types"),
+        (SGBDense(4, out_types=5), (1, 5), "out_types"),
+        (SGBDense(4, out_types=0), (1, 5), "out_types"),
+        (SGBMLP(widths=(4, 2), cell_types=(1, 1)), (1, 5), "cell_types"),
+        (SGBConv(4, (3, 3), types=(4, 1, 1, 1)), (1, 5, 5, 2), "height types"),
+    ],
+)
+def test_bad_layer_arguments_raise_clear_errors(layer, shape, match):
+    with pytest.raises(ValueError, match=match):
+        _init(layer, jnp.ones(shape))
+
+
+def test_elbo_rejects_zero_samples():
+    model = SGBMLP(widths=(3,), cell_types=(None, None))
+    params = _init(model, jnp.ones((1, 2)))
+    with pytest.raises(ValueError, match="num_samples"):
+        elbo_loss(
+            model,
+            params,
+            jnp.ones((1, 2)),
+            jnp.zeros(1, int),
+            jax.random.key(0),
+            num_samples=0,
+            kl_weight=1.0,
+        )
