@@ -198,3 +198,18 @@ class SGBMLP(nn.Module):
             if i < len(self.widths) - 1:
                 x = nn.relu(x)
         return x
+
+
+def genome_tables(params: dict) -> dict[str, tuple[jnp.ndarray, jnp.ndarray]]:
+    """Each SGB layer's type tables (mu, sigma), keyed by the layer's path, e.g. "SGBDense_0"."""
+    tables = {}
+
+    def visit(tree: dict, path: tuple[str, ...]) -> None:
+        for name, sub in tree.items():
+            if name == "genome":
+                tables["/".join(path)] = (sub["mu"], jax.nn.softplus(sub["rho"]))
+            elif isinstance(sub, dict):
+                visit(sub, (*path, name))
+
+    visit(params["params"], ())
+    return tables

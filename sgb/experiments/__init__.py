@@ -6,12 +6,16 @@ file with provenance and returns its path.
 """
 
 import importlib
+import os
 from types import ModuleType
 
 PROFILE_NAMES = ("smoke", "cpu", "paper")
 
 # experiment name -> module under sgb.experiments
-EXPERIMENTS: dict[str, str] = {}
+EXPERIMENTS: dict[str, str] = {
+    "bbb": "bayes_by_backprop",
+    "theory": "theory",
+}
 
 
 def get_experiment(name: str) -> ModuleType:
@@ -26,3 +30,8 @@ def check_profile(profile: str) -> str:
     if profile not in PROFILE_NAMES:
         raise ValueError(f"unknown profile {profile!r}; choose one of {PROFILE_NAMES}")
     return profile
+
+
+def profile_from_env() -> str:
+    """The profile named by the environment variable ``SGB_PROFILE`` (default "smoke")."""
+    return check_profile(os.environ.get("SGB_PROFILE", "smoke"))
