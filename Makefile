@@ -1,0 +1,39 @@
+# The two commands of the README, each doing its own set-up:
+#   make book   build the book, executing every chapter at the smoke profile (_build/html)
+#   make test   ruff, the unit tests and every notebook (nbmake)
+
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.stamp
+JOBS ?= 2
+
+# Recipes run with the virtualenv first on PATH; chapters run at the smoke profile.
+export PATH := $(CURDIR)/$(BIN):$(PATH)
+export VIRTUAL_ENV := $(CURDIR)/$(VENV)
+export SGB_PROFILE := smoke
+
+.PHONY: venv test book clean distclean
+
+venv: $(STAMP)
+
+$(STAMP): requirements.txt pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --disable-pip-version-check -q -r requirements.txt
+	$(BIN)/python -m pip install --disable-pip-version-check -q --no-deps -e '.[book,test]'
+	touch $@
+
+test: venv
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/python -m pytest -n $(JOBS) --nbmake --nbmake-timeout=900 tests book
+
+book: venv
+	$(BIN)/jupyter-book build . -W --keep-going
+
+clean:
+	rm -rf _build .pytest_cache .ruff_cache *.egg-info
+	find . -path ./$(VENV) -prune -o -name __pycache__ -type d -prune -exec rm -rf {} +
+
+distclean: clean
+	rm -rf $(VENV)
