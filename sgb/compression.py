@@ -51,3 +51,19 @@ def compression_ratio(uncompressed: int, compressed: int) -> float:
             f"compressed={compressed}"
         )
     return uncompressed / compressed
+
+
+def hidden_types_sweep(
+    sizes: Sequence[int],
+    hidden_types: Sequence[int],
+    input_types: int | None = None,
+    output_types: int | None = None,
+) -> list[float]:
+    """Compression ratio of an SGB MLP for each k in ``hidden_types`` (k types in every
+    hidden layer, capped at the layer's width), inputs and outputs typed as given."""
+    dense = dense_param_count(sizes)
+    ratios = []
+    for k in hidden_types:
+        types = [input_types, *(min(k, n) for n in sizes[1:-1]), output_types]
+        ratios.append(compression_ratio(dense, sgb_param_count(sizes, types)))
+    return ratios

@@ -2,7 +2,13 @@ import jax
 import jax.numpy as jnp
 import pytest
 
-from sgb.compression import compression_ratio, dense_param_count, sgb_param_count, tree_param_count
+from sgb.compression import (
+    compression_ratio,
+    dense_param_count,
+    hidden_types_sweep,
+    sgb_param_count,
+    tree_param_count,
+)
 from sgb.layers import SGBMLP
 from sgb.population import init_params
 
@@ -18,10 +24,7 @@ def test_counts_match_the_parameters_flax_creates():
 
 def test_paper_mnist_shape_compression_grows_as_hidden_types_shrink():
     sizes = (784, 800, 10)
-    ratios = [
-        compression_ratio(dense_param_count(sizes), sgb_param_count(sizes, (30, k, 10)))
-        for k in (800, 100, 10, 1)
-    ]
+    ratios = hidden_types_sweep(sizes, (800, 100, 10, 1), input_types=30, output_types=10)
     assert ratios == sorted(ratios)
     # hidden types 10: 2*(30*10 + 10*10) means/rhos + 810 biases
     assert ratios[2] == pytest.approx(636_010 / 1_610)

@@ -1,0 +1,116 @@
+"""Figures of chapters 1 and 2: the bottleneck, compression by cell types, Bayes by backprop."""
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+from scipy import stats as scipy_stats
+
+from sgb.plots import PALETTE, subplots
+from sgb.stats import sem
+
+
+def bits_bars(bits: Mapping[str, float], title: str):
+    """Horizontal bars of information amounts (bits) on a log axis."""
+    fig, ax = subplots(figsize=(6.5, 0.6 + 0.5 * len(bits)))
+    names = list(bits)
+    ax.barh(names, [bits[n] for n in names], color=PALETTE["sgb"])
+    ax.set_xscale("log")
+    ax.set_xlabel("information (bits, log scale)")
+    ax.set_title(title)
+    ax.invert_yaxis()
+    for i, name in enumerate(names):
+        ax.text(bits[name], i, f" {bits[name]:.1e}", va="center", fontsize=9)
+    return fig
+
+
+def compression_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]]]):
+    """Compression ratio against the number of hidden cell types, one line per network."""
+    fig, ax = subplots()
+    for name, (types, ratios) in curves.items():
+        ax.plot(types, ratios, marker="o", label=name)
+    ax.axhline(1.0, color=PALETTE["baseline"], lw=1, ls="--", label="no compression")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("cell types per hidden layer, k")
+    ax.set_ylabel("compression ratio (dense params / SGB params)")
+    ax.legend()
+    return fig
+
+
+def predictive_bands(fit: Mapping[str, np.ndarray]):
+    """Training data, the predictive mean and +-1, 2 standard deviations of a Bayesian MLP."""
+    fig, ax = subplots()
+    grid, mean, std = fit["grid"], fit["mean"], fit["std"]
+    for k, alpha in ((2, 0.15), (1, 0.3)):
+        ax.fill_between(
+            grid,
+            mean - k * std,
+            mean + k * std,
+            color=PALETTE["sgb"],
+            alpha=alpha,
+            lw=0,
+            label=f"mean $\\pm$ {k} sd",
+        )
+    ax.plot(grid, mean, color=PALETTE["sgb"], label="predictive mean")
+    ax.plot(grid, np.sin(3 * grid), color=PALETTE["baseline"], ls="--", lw=1, label="sin(3x)")
+    ax.scatter(fit["x"], fit["y"], s=12, color="black", zorder=3, label="training data")
+    ax.set_xlabel("input x")
+    ax.set_ylabel("output y")
+    ax.legend(loc="lower left", fontsize=8)
+    return fig
+
+
+def accuracy_comparison(rows: Sequence[Mapping]):
+    """Innate test accuracy per classifier: mean network, individuals (mean and 95% interval
+    over the sampled individuals and seeds) and the population-averaged prediction."""
+    variants = list(dict.fromkeys(r["variant"] for r in rows))
+    kinds = [
+        ("mean_network", "mean network"),
+        ("individuals", "sampled individuals"),
+        ("population_average", "population-averaged prediction"),
+    ]
+    colors = [PALETTE["mean_network"], PALETTE["individuals"], PALETTE["sgb"]]
+    fig, ax = subplots(figsize=(7.5, 4))
+    width = 0.26
+    for j, ((key, label), color) in enumerate(zip(kinds, colors, strict=True)):
+        means, errors = [], []
+        for variant in variants:
+            values = np.concatenate(
+                [np.atleast_1d(r[key]) for r in rows if r["variant"] == variant]
+            )
+            means.append(values.mean())
+            half = scipy_stats.t.ppf(0.975, values.size - 1) * sem(values) if values.size > 1 else 0
+            errors.append(half)
+        x = np.arange(len(variants)) + (j - 1) * width
+        ax.bar(x, means, width, yerr=errors, capsize=3, color=color, label=label)
+    ax.set_xticks(np.arange(len(variants)), variants, fontsize=9)
+    ax.set_ylabel("test accuracy")
+    low = min(min(np.atleast_1d(r[k]).min() for k, _ in kinds) for r in rows)
+    ax.set_ylim(max(0.0, low - 0.1), 1.0)
+    ax.legend(loc="lower right", fontsize=8)
+    return fig
+
+
+def type_pair_histogram(weights: np.ndarray, mu: float, sigma: float, title: str):
+    """Histogram of one type pair's sampled weights against its N(mu, sigma^2) density."""
+    fig, ax = subplots()
+    ax.hist(
+        weights,
+        bins=30,
+        density=True,
+        color=PALETTE["individuals"],
+        alpha=0.7,
+        label=f"{weights.size} sampled synapses",
+    )
+    grid = np.linspace(mu - 4 * sigma, mu + 4 * sigma, 200)
+    ax.plot(
+        grid,
+        scipy_stats.norm.pdf(grid, mu, sigma),
+        color="black",
+        label=f"N($\\mu$={mu:.3f}, $\\sigma$={sigma:.3f})",
+    )
+    ax.set_xlabel("synaptic weight")
+    ax.set_ylabel("density")
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    return fig
