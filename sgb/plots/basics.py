@@ -15,6 +15,7 @@ def bits_bars(bits: Mapping[str, float], title: str):
     names = list(bits)
     ax.barh(names, [bits[n] for n in names], color=PALETTE["sgb"])
     ax.set_xscale("log")
+    ax.set_xlim(min(bits.values()) / 10, max(bits.values()) * 30)
     ax.set_xlabel("information (bits, log scale)")
     ax.set_title(title)
     ax.invert_yaxis()
@@ -33,7 +34,7 @@ def compression_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]
     ax.set_yscale("log")
     ax.set_xlabel("cell types per hidden layer, k")
     ax.set_ylabel("compression ratio (dense params / SGB params)")
-    ax.legend()
+    ax.legend(loc="upper right", fontsize=8)
     return fig
 
 
