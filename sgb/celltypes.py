@@ -61,3 +61,16 @@ def block_counts(shape: Sequence[int], types: Sequence[int]) -> np.ndarray:
         _check_counts(n, k, f"shape[{axis}]", f"types[{axis}]")
         counts = np.multiply.outer(counts, type_sizes(n, k))
     return counts
+
+
+def type_pair_block(kernel: jnp.ndarray, types: Sequence[int], pair: Sequence[int]) -> jnp.ndarray:
+    """The synapses of one type-table entry: the sub-array of ``kernel`` whose neurons have
+    the types in ``pair`` along each axis (``types`` = types per axis)."""
+    if not len(kernel.shape) == len(types) == len(pair):
+        raise ValueError(f"kernel {kernel.shape}, types {types} and pair {pair} must match")
+    index = []
+    for n, k, t in zip(kernel.shape, types, pair, strict=True):
+        if not 0 <= t < k:
+            raise ValueError(f"pair entry {t} is not a type in [0, {k})")
+        index.append(np.flatnonzero(assign_cell_types(n, k) == t))
+    return kernel[np.ix_(*index)]

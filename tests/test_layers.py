@@ -3,7 +3,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from sgb.celltypes import assign_cell_types
+from sgb.celltypes import assign_cell_types, type_pair_block
 from sgb.compression import tree_param_count
 from sgb.elbo import elbo_loss, sown_kl
 from sgb.layers import SGBMLP, SGBConv, SGBDense, genome_kl
@@ -28,8 +28,8 @@ def test_sampled_weights_of_a_type_pair_have_the_tables_mean_and_sigma():
     genome["mu"] = genome["mu"].at[1, 2].set(0.7)
     genome["rho"] = genome["rho"].at[1, 2].set(jnp.log(jnp.expm1(0.25)))  # sigma = 0.25
     kernel = individual_kernels(layer, params, x, jax.random.key(3))["genome"]["kernel"]
-    rows, cols = assign_cell_types(90, 3) == 1, assign_cell_types(120, 4) == 2
-    block = np.asarray(kernel)[np.ix_(rows, cols)].ravel()  # 30 * 30 = 900 synapses
+    block = np.asarray(type_pair_block(kernel, (3, 4), (1, 2))).ravel()
+    assert block.size == 30 * 30
     n = block.size
     assert abs(block.mean() - 0.7) < 4 * 0.25 / np.sqrt(n)
     # the sample std of n normals has standard error sigma / sqrt(2(n-1))

@@ -104,7 +104,8 @@ def compare_classifiers(config: BBBConfig, progress: bool = True) -> dict[str, A
     """Train every variant for every seed on digits; innate test accuracies and genome sigmas.
 
     Returns ``{"rows": [...], "examples": {variant: (model, params)}}``; one row per
-    (variant, seed) with compression, accuracies and the mean sigma of each layer.
+    (variant, seed) with compression, accuracies, the mean sigma of each layer and the
+    last epoch's data term and KL / n_train (nats per example).
     """
     rows, examples = [], {}
     for seed in config.seeds:
@@ -125,6 +126,8 @@ def compare_classifiers(config: BBBConfig, progress: bool = True) -> dict[str, A
                     ),
                     **result["accuracy"],
                     "mean_sigma": sigmas,
+                    "final_data_term": result["history"][-1]["data"],
+                    "final_kl_per_example": result["history"][-1]["kl"] / len(data.x_train),
                 }
             )
             examples.setdefault(name, (result["model"], result["params"]))
