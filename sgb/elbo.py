@@ -41,7 +41,8 @@ def elbo_loss(
     """Negative ELBO per training example and its parts ``{"data", "kl"}``.
 
     ``num_samples`` (S) individuals are drawn with keys split from ``key``;
-    their data terms and KLs are averaged.
+    their data terms and KLs are averaged. The samples run one after another
+    (``lax.map``): on CPU that measured about twice as fast as ``vmap`` for S = 4.
     """
     if num_samples < 1:
         raise ValueError(f"num_samples must be >= 1, got {num_samples}")
@@ -50,6 +51,6 @@ def elbo_loss(
         outputs, state = model.apply(params, x, rngs={"sample": sample_key}, mutable=["losses"])
         return data_loss(outputs, y), sown_kl(state)
 
-    data, kl = jax.vmap(one_sample)(jax.random.split(key, num_samples))
+    data, kl = jax.lax.map(one_sample, jax.random.split(key, num_samples))
     data, kl = data.mean(), kl.mean()
     return data + kl_weight * kl, {"data": data, "kl": kl}
