@@ -86,3 +86,20 @@ def test_notebook_starts_with_the_guarded_install_cell(notebook):
     assert match.group(1) == f"v{version}", (
         f"{notebook} installs {match.group(1)}, pyproject.toml says v{version}"
     )
+
+
+def test_pinned_versions_satisfy_the_package_dependencies():
+    from packaging.requirements import Requirement
+
+    requirements = _pins((ROOT / "requirements.txt").read_text().splitlines())
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    declared = list(project["dependencies"])
+    for extra in project["optional-dependencies"].values():
+        declared += extra
+    for line in declared:
+        requirement = Requirement(line)
+        name = _normalise(requirement.name)
+        assert name in requirements, f"{name} is a dependency but requirements.txt does not pin it"
+        assert requirements[name] in requirement.specifier, (
+            f"requirements.txt pins {name}=={requirements[name]}, outside {requirement.specifier}"
+        )
