@@ -1,0 +1,376 @@
+"""PPO for vanilla and SGB actor-critics on Brax environments.
+
+One training iteration:
+
+1. *Births.* Every parallel environment whose episode ended during the last
+   unroll is reset, and a new individual is born for it: a fresh PRNG key,
+   from which its actor and critic weights are drawn from the current genome
+   (``sgb.rl.networks.individuals``). Environments still in an episode keep
+   their individual's key. So an individual lives exactly one episode, and
+   each of the ``num_envs`` environments runs its own individual.
+2. *Unroll.* Each environment runs ``unroll_length`` steps. Actions are
+   tanh(u), u ~ N(loc, scale) from the individual's actor. An environment
+   whose episode ends waits, masked out, until the unroll is over (no
+   auto-reset), so one unroll of one environment is always played by one
+   individual. Episodes are cut at ``episode_length`` steps (truncation:
+   the value of the last state is bootstrapped).
+3. *Update.* ``num_epochs`` passes over the unrolls in ``num_minibatches``
+   minibatches of environments. For each unroll the individual's weights are
+   drawn again *from its stored key under the current genome*: the PPO
+   ratio pi_new(a|s) / pi_old(a|s) compares the same individual (same noise
+   draw) before and after the genome update, as reparameterised sampling
+   allows. Loss = PPO clip loss + c1 value loss - c2 entropy
+   + c3 (KL of actor and critic genomes, averaged over the minibatch's
+   individuals). Advantages by GAE, normalised over the valid steps.
+
+The vanilla network is the special case with no sampling and no KL.
+"""
+
+import time
+from dataclasses import dataclass, field, replace
+from functools import partial
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from tqdm.auto import tqdm
+
+from sgb.rl.envs import EnvSpec, make_env
+from sgb.rl.networks import (
+    MLP,
+    NetworkConfig,
+    action_distribution,
+    apply,
+    gaussian_entropy,
+    individuals,
+    tanh_gaussian_log_prob,
+)
+from sgb.rl.normalizer import Normalizer, init_normalizer, normalize, update
+from sgb.rl.population import population_returns
+
+
+@dataclass(frozen=True)
+class PPOConfig:
+    """Hyperparameters of one PPO run; steps are environment steps summed over environments."""
+
+    env: EnvSpec = field(default_factory=EnvSpec)
+    network: NetworkConfig = field(default_factory=NetworkConfig)
+    total_steps: int = 200_000
+    num_envs: int = 128
+    unroll_length: int = 16
+    num_minibatches: int = 4
+    num_epochs: int = 4
+    learning_rate: float = 3e-4
+    clip: float = 0.3
+    value_coef: float = 0.5
+    entropy_coef: float = 1e-2
+    kl_coef: float = 1e-6
+    discount: float = 0.97
+    gae_lambda: float = 0.95
+    reward_scaling: float = 10.0
+    episode_length: int = 1000
+    num_evals: int = 5
+    eval_individuals: int = 32
+
+    def __post_init__(self) -> None:
+        for name in (
+            "total_steps",
+            "num_envs",
+            "unroll_length",
+            "num_minibatches",
+            "num_epochs",
+            "episode_length",
+            "num_evals",
+            "eval_individuals",
+        ):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+        if self.num_envs % self.num_minibatches:
+            raise ValueError(
+                f"num_envs={self.num_envs} must be a multiple of num_minibatches="
+                f"{self.num_minibatches}"
+            )
+
+    @property
+    def steps_per_iteration(self) -> int:
+        return self.num_envs * self.unroll_length
+
+    @property
+    def iterations(self) -> int:
+        return max(1, self.total_steps // self.steps_per_iteration)
+
+
+class Params(NamedTuple):
+    actor: dict
+    critic: dict
+
+
+class TrainState(NamedTuple):
+    params: Params
+    opt_state: optax.OptState
+    normalizer: Normalizer
+    env_state: object
+    steps: jnp.ndarray  # (E,) steps into the current episode
+    finished: jnp.ndarray  # (E,) 1.0 where the episode ended
+    ind_keys: jax.Array  # (E, 2) key of each environment's individual
+    key: jax.Array
+
+
+class Unroll(NamedTuple):
+    obs: jnp.ndarray  # (E, T, obs)
+    u: jnp.ndarray  # (E, T, act) pre-tanh actions
+    log_prob: jnp.ndarray  # (E, T)
+    reward: jnp.ndarray
+    done: jnp.ndarray
+    truncation: jnp.ndarray
+    valid: jnp.ndarray
+    last_obs: jnp.ndarray  # (E, obs)
+    ind_keys: jax.Array  # (E, 2)
+
+
+@dataclass
+class TrainResult:
+    """Trained parameters, observation statistics and the learning curve."""
+
+    config: PPOConfig
+    params: Params
+    normalizer: Normalizer
+    eval_steps: list[int]
+    eval_returns: list[float]
+    train_steps_per_s: float
+    wall_time_s: float
+
+
+def _models(config: PPOConfig):
+    env = make_env(config.env)
+    return env, MLP(config.network, 2 * env.action_size), MLP(config.network, 1)
+
+
+def _critic_keys(keys: jax.Array) -> jax.Array:
+    return jax.vmap(lambda k: jax.random.fold_in(k, 1))(keys)
+
+
+def gae(reward, value, next_value, done, truncation, discount, lam):
+    """Advantages and value targets along the last axis (time).
+
+    ``value``/``next_value``: V(s_t), V(s_{t+1}); terminal steps (done and
+    not truncated) do not bootstrap; truncated steps bootstrap from s_{t+1}.
+    """
+    terminal = done * (1.0 - truncation)
+    delta = reward + discount * (1.0 - terminal) * next_value - value
+
+    def back(carry, x):
+        d, nd = x
+        carry = d + discount * lam * nd * carry
+        return carry, carry
+
+    xs = (jnp.moveaxis(delta, -1, 0), jnp.moveaxis(1.0 - done, -1, 0))
+    _, adv = jax.lax.scan(back, jnp.zeros(delta.shape[:-1]), xs, reverse=True)
+    adv = jnp.moveaxis(adv, 0, -1)
+    return adv, adv + value
+
+
+def _masked_mean(x, mask):
+    return jnp.sum(x * mask) / jnp.maximum(jnp.sum(mask), 1.0)
+
+
+def _loss(params: Params, data: Unroll, normalizer: Normalizer, config: PPOConfig):
+    env, actor, critic = _models(config)
+    sgb = config.network.sgb
+    a_layers, a_kl = individuals(actor, params.actor, data.ind_keys, env.observation_size)
+    c_layers, c_kl = individuals(
+        critic, params.critic, _critic_keys(data.ind_keys), env.observation_size
+    )
+    obs = normalize(normalizer, data.obs)
+    all_obs = jnp.concatenate([obs, normalize(normalizer, data.last_obs)[:, None]], axis=1)
+    values = apply(c_layers, all_obs, sgb)[..., 0]
+    loc, scale = action_distribution(apply(a_layers, obs, sgb))
+    log_prob = tanh_gaussian_log_prob(data.u, loc, scale)
+    reward = data.reward * config.reward_scaling
+    adv, target = gae(
+        reward,
+        jax.lax.stop_gradient(values[:, :-1]),
+        jax.lax.stop_gradient(values[:, 1:]),
+        data.done,
+        data.truncation,
+        config.discount,
+        config.gae_lambda,
+    )
+    mean_adv = _masked_mean(adv, data.valid)
+    std_adv = jnp.sqrt(_masked_mean((adv - mean_adv) ** 2, data.valid)) + 1e-8
+    adv = (adv - mean_adv) / std_adv
+    ratio = jnp.exp(log_prob - data.log_prob)
+    clipped = jnp.clip(ratio, 1 - config.clip, 1 + config.clip)
+    policy_loss = -_masked_mean(jnp.minimum(ratio * adv, clipped * adv), data.valid)
+    value_loss = _masked_mean((values[:, :-1] - target) ** 2, data.valid)
+    entropy = _masked_mean(gaussian_entropy(scale), data.valid)
+    kl = jnp.mean(a_kl) + jnp.mean(c_kl)
+    total = (
+        policy_loss
+        + config.value_coef * value_loss
+        - config.entropy_coef * entropy
+        + config.kl_coef * kl
+    )
+    return total, {"policy": policy_loss, "value": value_loss, "entropy": entropy, "kl": kl}
+
+
+def _optimizer(config: PPOConfig) -> optax.GradientTransformation:
+    return optax.adam(config.learning_rate)
+
+
+def init_state(config: PPOConfig, seed: int) -> TrainState:
+    """Initial parameters, optimizer, environments and individuals for ``seed``."""
+    env, actor, critic = _models(config)
+    key = jax.random.PRNGKey(seed)
+    key, ka, kc, kr, ki = jax.random.split(key, 5)
+    dummy = jnp.zeros((1, env.observation_size))
+    params = Params(
+        {"params": actor.init({"params": ka, "sample": ka}, dummy)["params"]},
+        {"params": critic.init({"params": kc, "sample": kc}, dummy)["params"]},
+    )
+    env_state = jax.jit(jax.vmap(env.reset))(jax.random.split(kr, config.num_envs))
+    e = config.num_envs
+    return TrainState(
+        params=params,
+        opt_state=_optimizer(config).init(params),
+        normalizer=init_normalizer(env.observation_size),
+        env_state=env_state,
+        steps=jnp.zeros(e),
+        finished=jnp.zeros(e),
+        ind_keys=jax.random.split(ki, e),
+        key=key,
+    )
+
+
+def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
+    env, actor, _ = _models(config)
+    key, k_reset, k_birth, k_act = jax.random.split(ts.key, 4)
+    e = config.num_envs
+    fresh = ts.finished > 0
+    resets = jax.vmap(env.reset)(jax.random.split(k_reset, e))
+
+    def pick(new, old):
+        return jnp.where(fresh.reshape((e,) + (1,) * (old.ndim - 1)), new, old)
+
+    env_state = jax.tree_util.tree_map(pick, resets, ts.env_state)
+    ind_keys = pick(jax.random.split(k_birth, e), ts.ind_keys)
+    steps = jnp.where(fresh, 0.0, ts.steps)
+    layers, _ = individuals(actor, ts.params.actor, ind_keys, env.observation_size)
+
+    def step(carry, k):
+        state, steps, finished = carry
+        loc, scale = action_distribution(
+            apply(layers, normalize(ts.normalizer, state.obs), config.network.sgb)
+        )
+        u = loc + scale * jax.random.normal(k, loc.shape)
+        log_prob = tanh_gaussian_log_prob(u, loc, scale)
+        nstate = jax.vmap(env.step)(state, jnp.tanh(u))
+        steps = steps + 1.0
+        truncation = jnp.where(steps >= config.episode_length, 1.0 - nstate.done, 0.0)
+        done = jnp.maximum(nstate.done, truncation)
+        valid = 1.0 - finished
+        out = (state.obs, u, log_prob, nstate.reward, done, truncation, valid)
+        return (nstate, steps, jnp.maximum(finished, done)), out
+
+    carry = (env_state, steps, jnp.zeros(e))
+    keys = jax.random.split(k_act, config.unroll_length)
+    (env_state, steps, finished), out = jax.lax.scan(step, carry, keys)
+    out = [jnp.swapaxes(x, 0, 1) for x in out]
+    data = Unroll(*out, last_obs=env_state.obs, ind_keys=ind_keys)
+    ts = ts._replace(
+        env_state=env_state, steps=steps, finished=finished, ind_keys=ind_keys, key=key
+    )
+    return ts, data
+
+
+def _sgd(ts: TrainState, data: Unroll, config: PPOConfig):
+    optimizer = _optimizer(config)
+    key, k_perm = jax.random.split(ts.key)
+    grad_fn = jax.value_and_grad(_loss, has_aux=True)
+
+    def minibatch(carry, idx):
+        params, opt_state = carry
+        batch = jax.tree_util.tree_map(lambda x: x[idx], data)
+        (_, metrics), grads = grad_fn(params, batch, ts.normalizer, config)
+        updates, opt_state = optimizer.update(grads, opt_state, params)
+        return (optax.apply_updates(params, updates), opt_state), metrics
+
+    def epoch(carry, k):
+        perm = jax.random.permutation(k, config.num_envs)
+        return jax.lax.scan(minibatch, carry, perm.reshape(config.num_minibatches, -1))
+
+    carry = (ts.params, ts.opt_state)
+    (params, opt_state), metrics = jax.lax.scan(
+        epoch, carry, jax.random.split(k_perm, config.num_epochs)
+    )
+    metrics = jax.tree_util.tree_map(jnp.mean, metrics)
+    return ts._replace(params=params, opt_state=opt_state, key=key), metrics
+
+
+@partial(jax.jit, static_argnames=("config", "n"))
+def train_iterations(ts: TrainState, config: PPOConfig, n: int):
+    """``n`` PPO iterations (unroll, normaliser update, SGD) in one jitted call."""
+
+    def body(ts, _):
+        ts, data = _unroll(ts, config)
+        ts = ts._replace(normalizer=update(ts.normalizer, data.obs, data.valid))
+        return _sgd(ts, data, config)
+
+    ts, metrics = jax.lax.scan(body, ts, None, n)
+    return ts, jax.tree_util.tree_map(lambda m: m[-1], metrics)
+
+
+def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: int) -> float:
+    """Mean innate return of ``eval_individuals`` individuals, one full episode each."""
+    returns = population_returns(
+        config.env,
+        config.network,
+        params.actor,
+        normalizer,
+        config.eval_individuals,
+        1,
+        config.episode_length,
+        seed=seed,
+    )
+    return float(np.mean(returns))
+
+
+def train(config: PPOConfig, seed: int = 0, progress: bool = True) -> TrainResult:
+    """Train with PPO; evaluates ``num_evals`` times, the last one after the final update.
+
+    Runs ``num_evals`` chunks of ``iterations // num_evals`` iterations (so
+    the steps trained are ``total_steps`` rounded down to a whole number of
+    chunks).
+    ``train_steps_per_s`` counts environment steps of training only (after the
+    first, compiling, chunk; evaluations excluded).
+    """
+    start = time.perf_counter()
+    ts = init_state(config, seed)
+    chunk = max(1, config.iterations // config.num_evals)
+    eval_steps, eval_returns = [], []
+    timed_steps, timed_s = 0, 0.0
+    for i in tqdm(range(config.num_evals), desc="PPO", disable=not progress):
+        t0 = time.perf_counter()
+        ts, _ = train_iterations(ts, config, chunk)
+        jax.block_until_ready(ts.params)
+        if i > 0 or config.num_evals == 1:
+            timed_s += time.perf_counter() - t0
+            timed_steps += chunk * config.steps_per_iteration
+        eval_steps.append((i + 1) * chunk * config.steps_per_iteration)
+        eval_returns.append(evaluate(config, ts.params, ts.normalizer, seed + 10_000 + i))
+    return TrainResult(
+        config=config,
+        params=ts.params,
+        normalizer=ts.normalizer,
+        eval_steps=eval_steps,
+        eval_returns=eval_returns,
+        train_steps_per_s=timed_steps / max(timed_s, 1e-9),
+        wall_time_s=time.perf_counter() - start,
+    )
+
+
+def with_steps(config: PPOConfig, total_steps: int) -> PPOConfig:
+    """``config`` with another step budget."""
+    return replace(config, total_steps=total_steps)

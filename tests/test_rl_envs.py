@@ -1,0 +1,42 @@
+"""Environment variants: the long-leg Ant really has longer legs; niches change the physics."""
+
+import numpy as np
+import pytest
+
+from sgb.rl.envs import LEG_SCALE, EnvSpec, leg_lengths, make_env
+
+
+def _sys(variant):
+    return make_env(EnvSpec("ant", "spring", variant)).sys
+
+
+def test_long_legs_are_longer_by_the_scale():
+    normal = leg_lengths(make_env(EnvSpec("ant", "spring")))
+    long = leg_lengths(make_env(EnvSpec("ant", "spring", "long_legs")))
+    assert normal.shape == (4,)
+    np.testing.assert_allclose(long / normal, LEG_SCALE, rtol=1e-5)
+    # capsule half-lengths of the leg segments scale too, radii do not
+    size_n, size_l = np.asarray(_sys("normal").geom_size), np.asarray(_sys("long_legs").geom_size)
+    capsules = np.asarray(_sys("normal").geom_type) == 3
+    np.testing.assert_allclose(size_l[capsules, 1] / size_n[capsules, 1], LEG_SCALE, rtol=1e-5)
+    np.testing.assert_allclose(size_l[capsules, 0], size_n[capsules, 0])
+    # the torso starts higher and the legs are heavier
+    assert float(_sys("long_legs").init_q[2]) == pytest.approx(0.55 * LEG_SCALE)
+    assert np.asarray(_sys("long_legs").body_mass)[2] > np.asarray(_sys("normal").body_mass)[2]
+
+
+def test_niches_change_only_their_physics():
+    normal, slippery, payload = _sys("normal"), _sys("slippery"), _sys("payload")
+    np.testing.assert_allclose(
+        np.asarray(slippery.geom_friction)[:, 0], 0.25 * np.asarray(normal.geom_friction)[:, 0]
+    )
+    assert float(payload.body_mass[1]) > 2 * float(normal.body_mass[1])
+    np.testing.assert_array_equal(np.asarray(payload.geom_size), np.asarray(normal.geom_size))
+    assert float(normal.opt.timestep) == float(slippery.opt.timestep) == 0.005  # spring tuning kept
+
+
+def test_bad_spec_raises():
+    with pytest.raises(ValueError, match="variant"):
+        EnvSpec("ant", "spring", "moon")
+    with pytest.raises(ValueError, match="ant only"):
+        EnvSpec("halfcheetah", "spring", "long_legs")
