@@ -1,0 +1,176 @@
+"""Figures of chapter 3 (the Jensen gap), drawn from ``sgb.experiments.theory.compute`` results."""
+
+from typing import Any
+
+import jax.numpy as jnp
+import numpy as np
+from matplotlib.colors import ListedColormap
+
+from sgb import theory
+from sgb.plots import PALETTE, subplots
+
+TITLES = {"convex": "convex", "concave": "concave", "nonconvex": "non-convex"}
+
+
+def _a(x) -> np.ndarray:
+    return np.asarray(x, dtype=float)
+
+
+def figure6(results: dict[str, Any]):
+    """The paper's Figure 6: per toy loss, the loss curve with mu's start (x) and end
+    (triangle) and the population's spread (mu +- sigma), and Delta L over training."""
+    runs = results["trajectories"]
+    fig, axes = subplots(2, len(runs), figsize=(12, 6.5))
+    for col, (name, run) in enumerate(runs.items()):
+        mu, sigma = _a(run["mu"]), _a(run["sigma"])
+        lo = min(mu.min() - 2 * sigma.max(), -2.0)
+        hi = max(mu.max() + 2 * sigma.max(), 2.0)
+        w = np.linspace(lo, hi, 400)
+        loss = theory.toy_loss(name)
+        top, bottom = axes[0, col], axes[1, col]
+        top.plot(w, loss(jnp.asarray(w)), color="k", lw=1.5, label="L(w)")
+        for i, color, marker, label in ((0, "k", "x", "start"), (-1, "red", "^", "end")):
+            top.axvspan(
+                mu[i] - sigma[i],
+                mu[i] + sigma[i],
+                color=color,
+                alpha=0.12,
+                label=f"{label}: mu +- sigma",
+            )
+            top.plot(mu[i], loss(mu[i]), marker, color=color, ms=10, mew=2, label=f"{label}: mu")
+        top.set(title=f"{TITLES[name]} loss", xlabel="weight w", ylabel="loss L(w)")
+        top.legend(fontsize=7, loc="best")
+        steps = np.arange(mu.size)
+        gap, se = _a(run["gap"]), _a(run["gap_stderr"])
+        bottom.plot(steps, gap, color=PALETTE["sgb"], label="measured Delta L")
+        bottom.fill_between(steps, gap - 2 * se, gap + 2 * se, color=PALETTE["sgb"], alpha=0.25)
+        bottom.plot(
+            steps, _a(run["prediction"]), "--", color=PALETTE["dgb"], label="1/2 L''(mu) sigma^2"
+        )
+        bottom.axhline(0, color="grey", lw=0.8)
+        bottom.set(xlabel="gradient step", ylabel="Delta L = E[L(mu+sigma eps)] - L(mu)")
+        bottom.legend(fontsize=7)
+    return fig
+
+
+def sign_scan(results: dict[str, Any]):
+    """Delta L before and after training, against the starting mean mu0, for every toy loss."""
+    scan = results["sign_scan"]
+    fig, axes = subplots(1, len(scan), figsize=(12, 3.6))
+    for ax, (name, row) in zip(axes, scan.items(), strict=True):
+        mu0 = _a(row["mu0"])
+        for stage, color in (("start", "k"), ("end", "red")):
+            gap, se = _a(row[f"gap_{stage}"]), _a(row[f"gap_stderr_{stage}"])
+            ax.errorbar(
+                mu0, gap, yerr=2 * se, fmt="o-", ms=3, color=color, label=f"{stage} of training"
+            )
+        ax.axhline(0, color="grey", lw=0.8)
+        ax.set(
+            title=f"{TITLES[name]} (sigma0 = {row['sigma0']:g})",
+            xlabel="starting mean mu0",
+            ylabel="Delta L",
+        )
+        ax.set_yscale("symlog", linthresh=1e-4)
+        ax.legend(fontsize=7)
+    return fig
+
+
+def sign_map(results: dict[str, Any]):
+    """Non-convex loss: sign of Delta L over the starting point (mu0, sigma0), before and after
+    training; grey where |Delta L| < 3 standard errors (not distinguishable from 0)."""
+    grid = results["sign_map"]
+    mu0, sigma0 = _a(grid["mu0"]), _a(grid["sigma0"])
+    start = np.sign(_a(grid["gap_start"]))
+    end_gap, end_se = _a(grid["gap_end"]), _a(grid["gap_stderr_end"])
+    end = np.where(np.abs(end_gap) < 3 * end_se, 0.0, np.sign(end_gap))
+    cmap = ListedColormap([PALETTE["individuals"], "#dddddd", PALETTE["mean_network"]])
+    fig, axes = subplots(1, 2, figsize=(11, 4), sharey=True)
+    extent = (mu0[0], mu0[-1], sigma0[0], sigma0[-1])
+    for ax, signs, title in ((axes[0], start, "before training"), (axes[1], end, "after training")):
+        image = ax.imshow(
+            signs.T, origin="lower", aspect="auto", extent=extent, cmap=cmap, vmin=-1.5, vmax=1.5
+        )
+        ax.set(title=f"sign of Delta L, {title}", xlabel="starting mean mu0")
+    axes[0].set_ylabel("starting spread sigma0")
+    bar = fig.colorbar(image, ax=axes, ticks=[-1, 0, 1])
+    bar.ax.set_yticklabels(["< 0: individuals better", "~ 0 (within 3 SE)", "> 0: mean better"])
+    return fig
+
+
+def breakdown(results: dict[str, Any]):
+    """Non-convex loss: measured Delta L, the second-order prediction and the exact value,
+    against sigma, for several means mu."""
+    data = results["breakdown"]
+    sigma = _a(data["sigma"])
+    fig, axes = subplots(1, len(data["rows"]), figsize=(12, 3.6))
+    for ax, row in zip(axes, data["rows"], strict=True):
+        measured, se = _a(row["measured"]), _a(row["stderr"])
+        ax.errorbar(
+            sigma,
+            measured,
+            yerr=2 * se,
+            fmt="o",
+            ms=3,
+            color=PALETTE["sgb"],
+            label="measured (Monte Carlo)",
+        )
+        ax.plot(sigma, _a(row["exact"]), "-", color="k", lw=1, label="exact")
+        ax.plot(sigma, _a(row["predicted"]), "--", color=PALETTE["dgb"], label="second order")
+        ax.axhline(0, color="grey", lw=0.8)
+        ax.set(
+            title=f"mu = {row['mu']:g} (L'' = {row['curvature']:.2f})",
+            xlabel="spread sigma",
+            ylabel="Delta L",
+        )
+        ax.legend(fontsize=7)
+    return fig
+
+
+def network_gap(results: dict[str, Any]):
+    """Trained digits classifiers: measured Delta L (training cross-entropy; training and test
+    error) against the spread scale, next to the Hessian-trace prediction."""
+    networks = results["network"]
+    fig, axes = subplots(1, 2, figsize=(11, 4))
+    for net, marker in zip(networks, "os", strict=False):
+        label = "types " + "/".join(
+            "n" if k is None else str(k) for k in net["classifier"]["cell_types"]
+        )
+        scales = _a([s["scale"] for s in net["scales"]])
+
+        def series(key, field="gap", scales_=net["scales"]):
+            return _a([s[key][field] for s in scales_])
+
+        ce, ce_se = series("train_cross_entropy"), series("train_cross_entropy", "stderr")
+        axes[0].errorbar(scales, ce, yerr=2 * ce_se, fmt=marker + "-", label=f"{label}: measured")
+        axes[0].plot(
+            scales,
+            _a([s["predicted"] for s in net["scales"]]),
+            marker + "--",
+            mfc="none",
+            label=f"{label}: 1/2 tr(H diag sigma^2)",
+        )
+        for key, style in (("train_error_rate", "-"), ("test_error_rate", ":")):
+            axes[1].errorbar(
+                scales,
+                100 * series(key),
+                yerr=200 * series(key, "stderr"),
+                fmt=marker + style,
+                label=f"{label}: {key.split('_')[0]} error",
+            )
+    axes[0].set(
+        xscale="log",
+        yscale="log",
+        xlabel="spread scale c (sigma -> c sigma)",
+        ylabel="Delta L, cross-entropy (nats)",
+        title="training cross-entropy",
+    )
+    axes[1].axhline(0, color="grey", lw=0.8)
+    axes[1].set(
+        xscale="log",
+        xlabel="spread scale c (sigma -> c sigma)",
+        ylabel="Delta error (percentage points)",
+        title="error rate: individuals - mean network",
+    )
+    for ax in axes:
+        ax.legend(fontsize=7)
+    return fig
