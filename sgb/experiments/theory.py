@@ -245,6 +245,7 @@ def network_gap(config: TheoryConfig, progress: bool = True) -> list[dict[str, A
         out.append(
             {
                 "classifier": classifier,
+                "cell_types": classifier.cell_types,
                 "synapses": int(sigmas.size),
                 "sigma_mean": float(sigmas.mean()),
                 "sigma_min": float(sigmas.min()),
@@ -277,3 +278,39 @@ def run(profile: str, out_dir: Path, **options: Any) -> Path:
     results = compute(config)
     record = provenance(config, profile, [config.seed], time.time() - start)
     return write_results(Path(out_dir) / "theory.json", results, record)
+
+
+def network_summary(results: dict[str, Any]) -> tuple[list[dict], list[dict]]:
+    """Rows for the chapter's tables, from ``compute`` output or a results file's ``results``:
+    per network at the trained spread (scale 1), and per noisy layer."""
+    overall, layers = [], []
+    for net in results["network"]:
+        types = "/".join("n" if k is None else str(k) for k in net["cell_types"])
+        base = next(s for s in net["scales"] if s["scale"] == 1.0)
+        overall.append(
+            {
+                "cell types": types,
+                "mean sigma": net["sigma_mean"],
+                "mean-network test accuracy": net["accuracy"]["mean_network"],
+                "Delta L cross-entropy (train)": float(base["train_cross_entropy"]["gap"]),
+                "+- SE": float(base["train_cross_entropy"]["stderr"]),
+                "exact 1/2 tr(H diag sigma^2)": float(base["predicted"]),
+                f"Hutchinson, {net['hutchinson_probes']} probes": float(net["hutchinson"]["value"]),
+                "+- SE ": float(net["hutchinson"]["stderr"]),
+                "Delta train error (pp)": 100 * float(base["train_error_rate"]["gap"]),
+                "Delta test error (pp)": 100 * float(base["test_error_rate"]["gap"]),
+                "+- SE  ": 100 * float(base["test_error_rate"]["stderr"]),
+            }
+        )
+        for layer in net["layers"]:
+            layers.append(
+                {
+                    "cell types": types,
+                    "noisy layer": layer["layer"],
+                    "measured Delta L (CE)": float(layer["gap"]),
+                    "+- SE": float(layer["stderr"]),
+                    "1/2 sum H_ss sigma_s^2": float(layer["predicted"]),
+                    "measured / predicted": float(layer["gap"]) / float(layer["predicted"]),
+                }
+            )
+    return overall, layers

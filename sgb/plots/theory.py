@@ -16,6 +16,11 @@ def _a(x) -> np.ndarray:
     return np.asarray(x, dtype=float)
 
 
+def types_label(cell_types) -> str:
+    """Cell types per layer as "n/8/10" ("n": one type per neuron)."""
+    return "/".join("n" if k is None else str(k) for k in cell_types)
+
+
 def figure6(results: dict[str, Any]):
     """The paper's Figure 6: per toy loss, the loss curve with mu's start (x) and end
     (triangle) and the population's spread (mu +- sigma), and Delta L over training."""
@@ -131,30 +136,37 @@ def network_gap(results: dict[str, Any]):
     error) against the spread scale, next to the Hessian-trace prediction."""
     networks = results["network"]
     fig, axes = subplots(1, 2, figsize=(11, 4))
-    for net, marker in zip(networks, "os", strict=False):
-        label = "types " + "/".join(
-            "n" if k is None else str(k) for k in net["classifier"]["cell_types"]
-        )
+    colors = (PALETTE["sgb"], PALETTE["dgb"], PALETTE["baseline"])
+    for net, marker, color in zip(networks, "os^", colors, strict=False):
+        label = "types " + types_label(net["cell_types"])
         scales = _a([s["scale"] for s in net["scales"]])
 
         def series(key, field="gap", scales_=net["scales"]):
             return _a([s[key][field] for s in scales_])
 
         ce, ce_se = series("train_cross_entropy"), series("train_cross_entropy", "stderr")
-        axes[0].errorbar(scales, ce, yerr=2 * ce_se, fmt=marker + "-", label=f"{label}: measured")
+        axes[0].errorbar(
+            scales, ce, yerr=2 * ce_se, fmt=marker + "-", color=color, label=f"{label}: measured"
+        )
         axes[0].plot(
             scales,
             _a([s["predicted"] for s in net["scales"]]),
             marker + "--",
+            color=color,
             mfc="none",
             label=f"{label}: 1/2 tr(H diag sigma^2)",
         )
-        for key, style in (("train_error_rate", "-"), ("test_error_rate", ":")):
+        for key, style, fill in (
+            ("train_error_rate", "-", "full"),
+            ("test_error_rate", ":", "none"),
+        ):
             axes[1].errorbar(
                 scales,
                 100 * series(key),
                 yerr=200 * series(key, "stderr"),
                 fmt=marker + style,
+                color=color,
+                mfc=color if fill == "full" else "none",
                 label=f"{label}: {key.split('_')[0]} error",
             )
     axes[0].set(
@@ -172,5 +184,7 @@ def network_gap(results: dict[str, Any]):
         title="error rate: individuals - mean network",
     )
     for ax in axes:
+        ax.set_xticks(scales, [f"{c:g}" for c in scales])
+        ax.minorticks_off()
         ax.legend(fontsize=7)
     return fig
