@@ -130,6 +130,13 @@ def _transplant(target, reference, edited):
     return jax.tree_util.tree_unflatten(treedef, out)
 
 
+def variant_xml(name: str, variant: str) -> str:
+    """The MJCF model (XML text) of environment ``name`` in ``variant``."""
+    spec = EnvSpec(name, "spring", variant)
+    base = _base_xml(spec.name)
+    return base if variant == "normal" else _EDITS[variant](base)
+
+
 @functools.cache
 def make_env(spec: EnvSpec) -> brax.envs.Env:
     """The Brax environment of ``spec`` (cached: one object per spec, so jit caches hit)."""
@@ -141,8 +148,8 @@ def make_env(spec: EnvSpec) -> brax.envs.Env:
     except KeyError as error:
         raise ValueError(f"name {spec.name!r} is not a registered Brax environment") from error
     if spec.variant != "normal":
-        base = _base_xml(spec.name)
-        env.sys = _transplant(env.sys, mjcf.loads(base), mjcf.loads(_EDITS[spec.variant](base)))
+        reference = mjcf.loads(_base_xml(spec.name))
+        env.sys = _transplant(env.sys, reference, mjcf.loads(variant_xml(spec.name, spec.variant)))
     return env
 
 

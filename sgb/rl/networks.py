@@ -17,10 +17,11 @@ from dataclasses import dataclass
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
+import numpy as np
 
-from sgb.elbo import sown_kl
+from sgb.celltypes import assign_cell_types
 from sgb.layers import SGBDense
-from sgb.priors import GaussianPrior, ScaleMixturePrior
+from sgb.priors import GaussianPrior, Prior, ScaleMixturePrior
 
 Phenotype = list[tuple[jnp.ndarray, jnp.ndarray]]
 MIN_STD = 1e-3
@@ -65,7 +66,7 @@ class MLP(nn.Module):
     @nn.compact
     def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
         cfg = self.config
-        prior = GaussianPrior(0.1) if cfg.prior == "gaussian" else ScaleMixturePrior()
+        prior = _prior(cfg)
         for i, width in enumerate(cfg.hidden):
             if cfg.sgb:
                 layer = SGBDense(
@@ -82,39 +83,52 @@ class MLP(nn.Module):
         return nn.Dense(self.out, name="out")(x)
 
 
+def _membership(n: int, k: int) -> jnp.ndarray:
+    """One-hot cell-type membership (n, k) of n neurons in k contiguous balanced types."""
+    return jnp.asarray(np.eye(k, dtype=np.float32)[assign_cell_types(n, k)])
+
+
+def _prior(config: NetworkConfig) -> Prior:
+    """The weight prior named in ``config``."""
+    return GaussianPrior(0.1) if config.prior == "gaussian" else ScaleMixturePrior()
+
+
 def phenotype(
     model: MLP, params: dict, key: jax.Array | None, obs_size: int
 ) -> tuple[Phenotype, jnp.ndarray]:
     """The individual drawn with ``key`` (``None``: the mean network) and its KL (nats).
 
     Returns the list of (kernel (n_in, n_out), bias (n_out,)) of every layer
-    and the scalar KL of its genome to the prior (0 for vanilla networks).
-    Differentiable in ``params`` (reparameterised sampling).
+    and the Monte Carlo KL of this draw to the prior, summed over synapses
+    (log q(w) - log p(w), as in Bayes by backprop; 0 for vanilla networks and
+    the mean network). Differentiable in ``params`` (reparameterised).
+
+    A hidden layer's kernel is M_in mu M_out^T + (M_in sigma M_out^T) * eps
+    with one-hot type memberships M and eps ~ N(0, 1) drawn from
+    ``fold_in(key, layer)``: the same distribution as ``sgb.layers.SGBDense``
+    (whose mean network it reproduces exactly), written with matrix products
+    so that gradients of many individuals at once stay cheap on a CPU.
     """
-    dummy = jnp.zeros((1, obs_size))
-    if model.config.sgb and key is not None:
-        _, state = model.apply(
-            params, dummy, rngs={"sample": key}, mutable=["individual", "losses"]
-        )
-        kl = sown_kl(state)
-    else:
-        _, state = model.apply(params, dummy, mean_network=True, mutable=["individual"])
-        kl = jnp.zeros(())
-    p = params["params"]
-    layers = []
-    for i in range(len(model.config.hidden)):
-        name = f"hidden_{i}"
-        kernel = (
-            _unsown(state["individual"][name]["genome"]["kernel"]) if model.config.sgb else None
-        )
-        layers.append((p[name]["kernel"] if kernel is None else kernel, p[name]["bias"]))
+    cfg, p = model.config, params["params"]
+    layers, kl, n_in = [], jnp.zeros(()), obs_size
+    for i, width in enumerate(cfg.hidden):
+        layer = p[f"hidden_{i}"]
+        if not cfg.sgb:
+            layers.append((layer["kernel"], layer["bias"]))
+            continue
+        mu, rho = layer["genome"]["mu"], layer["genome"]["rho"]
+        m_in, m_out = _membership(n_in, mu.shape[0]), _membership(width, mu.shape[1])
+        kernel = m_in @ mu @ m_out.T
+        if key is not None:
+            sigma = m_in @ jax.nn.softplus(rho) @ m_out.T
+            eps = jax.random.normal(jax.random.fold_in(key, i), kernel.shape)
+            kernel = kernel + sigma * eps
+            log_q = jnp.sum(-0.5 * eps**2 - jnp.log(sigma) - 0.5 * jnp.log(2 * jnp.pi))
+            kl = kl + log_q - jnp.sum(_prior(cfg).log_prob(kernel))
+        layers.append((kernel, layer["bias"]))
+        n_in = width
     layers.append((p["out"]["kernel"], p["out"]["bias"]))
     return layers, kl
-
-
-def _unsown(value):
-    """A sown value: flax stores a tuple of the values sown, or the value itself."""
-    return value[0] if isinstance(value, tuple) else value
 
 
 def individuals(

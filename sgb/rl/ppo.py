@@ -231,6 +231,8 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
         {"params": critic.init({"params": kc, "sample": kc}, dummy)["params"]},
     )
     env_state = jax.jit(jax.vmap(env.reset))(jax.random.split(kr, config.num_envs))
+    # strong types, as the training step returns them (weak types would force a recompile)
+    env_state = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=x.dtype), env_state)
     e = config.num_envs
     return TrainState(
         params=params,

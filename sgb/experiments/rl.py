@@ -1,0 +1,236 @@
+"""Figures 3, 4 and 5: SGB-PPO on Brax, cell-type sweeps, population diversity, mean network.
+
+- ``fig3``: train vanilla PPO and SGB-PPO at several cell-type counts (hidden
+  width 128) for several seeds on one environment; innate return of the
+  SGB agents as a fraction of the vanilla agent's. Writes checkpoints of
+  every run.
+- ``fig4``: sample N individuals from a trained SGB (a checkpoint) and
+  evaluate each for several episodes on the Ant with normal and long legs
+  (4E) and on two physical niches (4F); Pearson r between conditions.
+- ``fig5``: the same individuals against the mean network on the normal Ant,
+  on the same initial states; paired t-test.
+"""
+
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from sgb import stats
+from sgb.experiments import check_profile
+from sgb.provenance import provenance, write_results
+from sgb.rl import checkpoints
+from sgb.rl.envs import EnvSpec
+from sgb.rl.networks import NetworkConfig
+from sgb.rl.population import population_returns
+from sgb.rl.ppo import PPOConfig, train
+
+REPO = Path(__file__).resolve().parents[2]
+CHECKPOINT_DIR = Path("rl") / "checkpoints"
+BACKENDS = {"ant": "spring", "halfcheetah": "spring"}
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """Figure 3: which cell-type counts (None = vanilla), seeds and PPO settings."""
+
+    cell_types: tuple[int | None, ...]
+    seeds: tuple[int, ...]
+    ppo: PPOConfig
+
+
+@dataclass(frozen=True)
+class PopulationConfig:
+    """Figures 4 and 5: which checkpoint, how many individuals, episodes and steps."""
+
+    checkpoint: str
+    n_individuals: int = 100
+    episodes: int = 5
+    episode_length: int = 1000
+    seed: int = 0
+    conditions: tuple[str, ...] = field(default=("normal", "long_legs", "slippery", "payload"))
+
+
+def _ppo(env: str, profile: str) -> PPOConfig:
+    """PPO settings per profile; the paper's: 2048 envs, 50M steps, clip and entropy of Table 2."""
+    spec = EnvSpec(env, BACKENDS[env])
+    clip, entropy = (0.3, 1e-2) if env == "ant" else (0.3, 1e-3)
+    base = PPOConfig(env=spec, clip=clip, entropy_coef=entropy)
+    if profile == "smoke":
+        return replace(
+            base, total_steps=4096, num_envs=32, episode_length=64, num_evals=1, eval_individuals=4
+        )
+    if profile == "cpu":
+        if env == "ant":
+            return replace(base, total_steps=200_000, num_evals=4)
+        return replace(base, total_steps=50_000, num_evals=2, eval_individuals=16)
+    return replace(
+        base,
+        total_steps=50_000_000,
+        num_envs=2048,
+        unroll_length=5,
+        num_minibatches=32,
+        num_evals=10,
+        eval_individuals=128,
+    )
+
+
+def sweep_config(env: str, profile: str) -> SweepConfig:
+    """The Figure 3 sweep for ``env`` at ``profile``."""
+    check_profile(profile)
+    if env not in BACKENDS:
+        raise ValueError(f"env must be one of {sorted(BACKENDS)}, got {env!r}")
+    types = {"smoke": (None, 16), "cpu": (64, None, 128, 32)}.get(
+        profile, (None, 128, 64, 48, 32, 16)
+    )
+    seeds = {"smoke": (0,), "cpu": (0, 1, 2)}.get(profile, (0, 1, 2, 3, 4))
+    return SweepConfig(types, seeds, _ppo(env, profile))
+
+
+def checkpoint_name(env: str, cell_types: int | None, seed: int, profile: str) -> str:
+    """File name of one Figure 3 run's checkpoint."""
+    label = "vanilla" if cell_types is None else f"k{cell_types}"
+    return f"{env}_{label}_s{seed}_{profile}.msgpack"
+
+
+def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
+    """Train the sweep; write per-run returns, fractions of vanilla and checkpoints."""
+    config = sweep_config(env, profile)
+    start = time.perf_counter()
+    runs = []
+    for k in config.cell_types:
+        ppo = replace(config.ppo, network=NetworkConfig(cell_types=k))
+        for seed in config.seeds:
+            result = train(ppo, seed=seed)
+            path = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile)
+            checkpoints.save(path, result, {"profile": profile, "seed": seed})
+            runs.append(
+                {
+                    "cell_types": k,
+                    "seed": seed,
+                    "final_return": result.eval_returns[-1],
+                    "eval_steps": result.eval_steps,
+                    "eval_returns": result.eval_returns,
+                    "train_steps_per_s": result.train_steps_per_s,
+                    "checkpoint": path.name,
+                }
+            )
+    results = {"env": env, "runs": runs, "summary": summarize_sweep(runs)}
+    record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
+    return write_results(Path(out_dir) / "rl" / f"fig3_{env}_{profile}.json", results, record)
+
+
+def summarize_sweep(runs: list[dict]) -> list[dict]:
+    """Per cell-type count: mean final return, SEM over seeds, fraction of vanilla and its SEM.
+
+    The fraction divides each seed's return by the mean vanilla return.
+    """
+    vanilla = np.mean([r["final_return"] for r in runs if r["cell_types"] is None])
+    out = []
+    for k in dict.fromkeys(r["cell_types"] for r in runs):
+        values = np.array([r["final_return"] for r in runs if r["cell_types"] == k])
+        spread = float(stats.sem(values)) if values.size > 1 else float("nan")
+        out.append(
+            {
+                "cell_types": k,
+                "mean_return": float(values.mean()),
+                "sem_return": spread,
+                "fraction": float(values.mean() / vanilla),
+                "sem_fraction": spread / abs(vanilla),
+                "n_seeds": int(values.size),
+            }
+        )
+    return out
+
+
+def population_config(profile: str) -> PopulationConfig:
+    """Figures 4 and 5 settings: the committed cpu checkpoint of the Ant with 64 cell types."""
+    check_profile(profile)
+    source = "paper" if profile == "paper" else "cpu"
+    checkpoint = str(CHECKPOINT_DIR / checkpoint_name("ant", 64, 0, source))
+    if profile == "smoke":
+        return PopulationConfig(checkpoint, n_individuals=8, episodes=2, episode_length=100)
+    return PopulationConfig(checkpoint)
+
+
+def evaluate_conditions(config: PopulationConfig, results_dir: Path) -> dict:
+    """Returns (N, episodes) of the individuals and of the mean network on every condition."""
+    ppo, params, normalizer, _ = checkpoints.load(Path(results_dir) / config.checkpoint)
+    out = {}
+    for variant in config.conditions:
+        spec = replace(ppo.env, variant=variant)
+        common = (
+            spec,
+            ppo.network,
+            params.actor,
+            normalizer,
+            config.n_individuals,
+            config.episodes,
+            config.episode_length,
+            config.seed,
+        )
+        out[variant] = {
+            "individuals": population_returns(*common),
+            "mean_network": population_returns(*common, mean_network=True),
+        }
+    return out
+
+
+def compare(returns: dict, a: str, b: str) -> dict:
+    """Pearson r (with p) of the individuals' mean returns on conditions ``a`` and ``b``."""
+    x = returns[a]["individuals"].mean(axis=1)
+    y = returns[b]["individuals"].mean(axis=1)
+    r = stats.pearson(x, y)
+    return {"conditions": [a, b], "r": r.statistic, "p": r.p_value, "n": len(x)}
+
+
+def individuals_vs_mean(returns: dict, condition: str = "normal") -> dict:
+    """Paired t-test of each individual's mean return against the mean network's on the
+    same initial states, and 99% confidence intervals of both."""
+    ind = returns[condition]["individuals"].mean(axis=1)
+    mean_net = returns[condition]["mean_network"].mean(axis=1)
+    t = stats.paired_t(ind, mean_net)
+    return {
+        "condition": condition,
+        "t": t.statistic,
+        "p": t.p_value,
+        "dof": t.dof,
+        "individuals_ci99": stats.mean_ci(ind, 0.99),
+        "mean_network_ci99": stats.mean_ci(mean_net, 0.99),
+    }
+
+
+def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
+    if env != "ant":
+        raise ValueError(
+            f"env must be 'ant' for {figure} (the variants are Ant bodies), got {env!r}"
+        )
+    config = population_config(profile)
+    start = time.perf_counter()
+    conditions = config.conditions if figure == "fig4" else ("normal",)
+    config = replace(config, conditions=conditions)
+    returns = evaluate_conditions(config, _results_root(out_dir, config))
+    results = {"returns": returns}
+    if figure == "fig4":
+        results["legs"] = compare(returns, "normal", "long_legs")
+        results["niches"] = compare(returns, "slippery", "payload")
+    else:
+        results["mean_network"] = individuals_vs_mean(returns)
+    record = provenance(config, profile, [config.seed], time.perf_counter() - start)
+    return write_results(Path(out_dir) / "rl" / f"{figure}_{env}_{profile}.json", results, record)
+
+
+def _results_root(out_dir: Path, config: PopulationConfig) -> Path:
+    """Where the checkpoint lies: ``out_dir`` if it has it, else the committed ``results/``."""
+    return Path(out_dir) if (Path(out_dir) / config.checkpoint).exists() else REPO / "results"
+
+
+def run_fig4(profile: str, out_dir: Path, env: str = "ant") -> Path:
+    """Figure 4E/F: individuals on normal vs long legs and on two niches."""
+    return _run_population(profile, out_dir, env, "fig4")
+
+
+def run_fig5(profile: str, out_dir: Path, env: str = "ant") -> Path:
+    """Figure 5: individuals against the mean network."""
+    return _run_population(profile, out_dir, env, "fig5")
