@@ -187,3 +187,21 @@ def test_bad_arguments_raise():
         NetworkConfig(hidden=(8,), cell_types=9)
     with pytest.raises(ValueError, match="registered"):
         train(_config(env=EnvSpec("no_such_env")), progress=False)
+
+
+def test_phenotype_agrees_with_the_sgb_layers():
+    """The mean network equals SGBDense's; sampled weights have each type pair's mean and std."""
+    config, ts = _sgb_params(rho_init=-2.0)
+    actor = MLP(config.network, 2)
+    x = jax.random.normal(jax.random.PRNGKey(5), (7, 2))
+    layers, kl = individuals(actor, ts.params.actor, None, 2)
+    expected = actor.apply(ts.params.actor, x, mean_network=True)
+    np.testing.assert_allclose(apply(layers, x, False), expected, rtol=1e-5, atol=1e-6)
+    assert float(kl) == 0.0
+    keys = jax.random.split(jax.random.PRNGKey(6), 4000)
+    layers, kl = individuals(actor, ts.params.actor, keys, 2)
+    genome = ts.params.actor["params"]["hidden_1"]["genome"]
+    w = np.asarray(layers[1][0])[:, :8, :8]  # the (type 0, type 0) block of the 32x32 layer
+    np.testing.assert_allclose(w.mean(), genome["mu"][0, 0], atol=3e-3)
+    np.testing.assert_allclose(w.std(), jax.nn.softplus(genome["rho"][0, 0]), rtol=2e-2)
+    assert kl.shape == (4000,) and np.all(np.isfinite(kl))

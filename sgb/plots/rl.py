@@ -1,0 +1,139 @@
+"""Figures of chapter 5: cell-type sweeps (Fig. 3C/D), population scatters (4E/F), mean network (5),
+and drawings of the Ant's body."""
+
+import mujoco
+import numpy as np
+
+from sgb import stats
+from sgb.plots import PALETTE, subplots
+from sgb.rl.envs import variant_xml
+
+
+def plot_sweep(summary: list[dict], env: str, ax=None):
+    """Innate return as a fraction of vanilla PPO against the number of cell types (SEM bars)."""
+    if ax is None:
+        _, ax = subplots()
+    rows = sorted(
+        (r for r in summary if r["cell_types"] is not None), key=lambda r: r["cell_types"]
+    )
+    k = [r["cell_types"] for r in rows]
+    ax.errorbar(
+        k,
+        [r["fraction"] for r in rows],
+        yerr=[r["sem_fraction"] for r in rows],
+        marker="o",
+        capsize=3,
+        color=PALETTE["sgb"],
+        label="SGB (innate, mean of individuals)",
+    )
+    ax.axhline(1.0, color=PALETTE["baseline"], ls="--", label="vanilla PPO (width 128)")
+    ax.set_xscale("log", base=2)
+    ax.set_xticks(k, [str(v) for v in k])
+    ax.set_xlabel("cell types per hidden layer")
+    ax.set_ylabel("return / vanilla return")
+    ax.set_title(env)
+    ax.legend(loc="lower right")
+    return ax
+
+
+def plot_pair(returns: dict, a: str, b: str, ax=None):
+    """Each individual's mean return on condition ``a`` vs ``b``, SEM over episodes as bars."""
+    if ax is None:
+        _, ax = subplots()
+    x, y = returns[a]["individuals"], returns[b]["individuals"]
+    ax.errorbar(
+        x.mean(1),
+        y.mean(1),
+        xerr=stats.sem(x, axis=1),
+        yerr=stats.sem(y, axis=1),
+        fmt="o",
+        ms=3,
+        alpha=0.6,
+        elinewidth=0.6,
+        color=PALETTE["individuals"],
+        label="individuals",
+    )
+    ax.plot(
+        returns[a]["mean_network"].mean(),
+        returns[b]["mean_network"].mean(),
+        "*",
+        ms=14,
+        color=PALETTE["mean_network"],
+        label="mean network",
+    )
+    r = stats.pearson(x.mean(1), y.mean(1))
+    ax.set_xlabel(f"return, {a.replace('_', ' ')}")
+    ax.set_ylabel(f"return, {b.replace('_', ' ')}")
+    ax.set_title(f"Pearson r = {r.statistic:.2f} (p = {r.p_value:.2g}, n = {x.shape[0]})")
+    ax.legend(loc="upper left")
+    return ax
+
+
+def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
+    """Sorted mean returns of the individuals against the mean network's, with 99% CI bands."""
+    if ax is None:
+        _, ax = subplots()
+    ind = returns[condition]["individuals"].mean(1)
+    mean_net = returns[condition]["mean_network"].mean(1)
+    rank = np.arange(1, ind.size + 1)
+    ax.plot(rank, np.sort(ind), ".", color=PALETTE["individuals"], label="individuals (sorted)")
+    for values, name in ((ind, "individuals"), (mean_net, "mean_network")):
+        mean, low, high = stats.mean_ci(values, 0.99)
+        label = "population mean" if name == "individuals" else "mean network"
+        ax.axhline(mean, color=PALETTE[name], label=f"{label}, 99% CI")
+        ax.axhspan(low, high, color=PALETTE[name], alpha=0.25)
+    t = stats.paired_t(ind, mean_net)
+    ax.set_xlabel("individual (rank)")
+    ax.set_ylabel("innate return")
+    ax.set_title(f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p_value:.2g}")
+    ax.legend(loc="lower right")
+    return ax
+
+
+def _capsules(xml: str) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """World end points and radius of every capsule and sphere at Brax's initial pose
+    (the model's ``init_qpos`` numeric)."""
+    model = mujoco.MjModel.from_xml_string(xml)
+    data = mujoco.MjData(model)
+    data.qpos[:] = model.numeric("init_qpos").data
+    mujoco.mj_forward(model, data)
+    out = []
+    for g in range(model.ngeom):
+        kind, size = model.geom_type[g], model.geom_size[g]
+        centre = data.geom_xpos[g]
+        if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
+            axis = data.geom_xmat[g].reshape(3, 3)[:, 2] * size[1]
+            out.append((centre - axis, centre + axis, float(size[0])))
+        elif kind == mujoco.mjtGeom.mjGEOM_SPHERE:
+            out.append((centre, centre, float(size[0])))
+    return out
+
+
+def draw_ant(variants: tuple[str, ...] = ("normal", "long_legs"), axes=None):
+    """Side and top views of the Ant's body in each variant, drawn from MuJoCo's geometry."""
+    if axes is None:
+        _, axes = subplots(2, len(variants), figsize=(3.2 * len(variants), 5.5), squeeze=False)
+    for col, variant in enumerate(variants):
+        parts = _capsules(variant_xml("ant", variant))
+        for row, (i, j, name) in enumerate(((0, 2, "x (m)"), (0, 1, "x (m)"))):
+            ax = axes[row][col]
+            for p, q, radius in parts:
+                ax.plot(
+                    [p[i], q[i]],
+                    [p[j], q[j]],
+                    lw=radius * 120,
+                    solid_capstyle="round",
+                    color="#8c6d4f",
+                )
+            ax.set_aspect("equal")
+            ax.set_xlabel(name)
+            ax.set_ylabel("z (m)" if row == 0 else "y (m)")
+            ax.set_xlim(-1.3, 1.3)
+            if row == 0:
+                ax.set_ylim(-0.1, 1.2)
+                ax.axhline(0.0, color="0.5", lw=1)
+                ax.set_title(f"{variant.replace('_', ' ')}: side")
+            else:
+                ax.set_ylim(-1.3, 1.3)
+                ax.set_title("top")
+    return axes
