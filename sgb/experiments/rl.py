@@ -62,9 +62,8 @@ def _ppo(env: str, profile: str) -> PPOConfig:
             base, total_steps=4096, num_envs=32, episode_length=64, num_evals=1, eval_individuals=4
         )
     if profile == "cpu":
-        if env == "ant":
-            return replace(base, total_steps=200_000, num_evals=4)
-        return replace(base, total_steps=50_000, num_evals=2, eval_individuals=16)
+        steps = 120_000 if env == "ant" else 30_000
+        return replace(base, total_steps=steps, num_evals=2, eval_individuals=16)
     return replace(
         base,
         total_steps=50_000_000,
