@@ -1,0 +1,136 @@
+"""Dataset loaders: parsers on files written here, the checksummed cache, offline errors."""
+
+import gzip
+import io
+import pickle
+import tarfile
+import urllib.error
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sgb import data
+
+
+def _idx_bytes(array: np.ndarray) -> bytes:
+    header = bytes([0, 0, 0x08, array.ndim]) + b"".join(
+        int(n).to_bytes(4, "big") for n in array.shape
+    )
+    return header + array.astype(np.uint8).tobytes()
+
+
+def _write_mnist(directory: Path, rng: np.random.Generator, monkeypatch) -> dict:
+    arrays = {
+        "train_images": rng.integers(0, 256, (12, 28, 28)),
+        "train_labels": rng.integers(0, 10, 12),
+        "test_images": rng.integers(0, 256, (5, 28, 28)),
+        "test_labels": rng.integers(0, 10, 5),
+    }
+    files = {}
+    for split, array in arrays.items():
+        path = directory / data.MNIST_FILES[split].name
+        path.write_bytes(gzip.compress(_idx_bytes(array)))
+        files[split] = data.MNIST_FILES[split]._replace(md5=data.md5sum(path))
+    monkeypatch.setattr(data, "MNIST_FILES", files)
+    return arrays
+
+
+def _cifar_tar(path: Path, rng: np.random.Generator) -> dict:
+    batches = {}
+    with tarfile.open(path, "w:gz") as tar:
+        for name in [f"data_batch_{i}" for i in range(1, 6)] + ["test_batch"]:
+            images = rng.integers(0, 256, (3, 3072), dtype=np.uint8)
+            labels = rng.integers(0, 10, 3).tolist()
+            batches[name] = (images, labels)
+            raw = pickle.dumps({b"data": images, b"labels": labels})
+            info = tarfile.TarInfo(f"cifar-10-batches-py/{name}")
+            info.size = len(raw)
+            tar.addfile(info, io.BytesIO(raw))
+    return batches
+
+
+def test_parse_idx_roundtrip_and_rejects_bad_headers():
+    array = np.arange(24, dtype=np.uint8).reshape(2, 3, 4)
+    np.testing.assert_array_equal(data.parse_idx(_idx_bytes(array)), array)
+    with pytest.raises(ValueError, match="magic"):
+        data.parse_idx(b"\x00\x00\x0d\x01" + bytes(8))
+    with pytest.raises(ValueError, match="shape"):
+        data.parse_idx(_idx_bytes(array)[:-3])
+
+
+def test_mnist_loads_written_idx_files(tmp_path, monkeypatch):
+    arrays = _write_mnist(tmp_path, np.random.default_rng(0), monkeypatch)
+    ds = data.mnist(directory=tmp_path)
+    assert ds.x_train.shape == (12, 784) and ds.x_test.shape == (5, 784)
+    assert ds.x_train.dtype == np.float32 and ds.y_train.dtype == np.int32
+    np.testing.assert_array_equal(ds.y_test, arrays["test_labels"])
+    # global standardisation by the training set keeps the pixel order
+    raw = arrays["train_images"].reshape(12, -1).astype(np.float64)
+    np.testing.assert_allclose(ds.x_train, (raw - raw.mean()) / (raw.std() + 1e-6), atol=1e-4)
+
+
+def test_cifar10_parses_written_tarball(tmp_path, monkeypatch):
+    path = tmp_path / data.CIFAR10_FILE.name
+    batches = _cifar_tar(path, np.random.default_rng(1))
+    monkeypatch.setattr(data, "CIFAR10_FILE", data.CIFAR10_FILE._replace(md5=data.md5sum(path)))
+    x_tr, y_tr, x_te, y_te = data.parse_cifar10_tar(path)
+    assert x_tr.shape == (15, 32, 32, 3) and x_te.shape == (3, 32, 32, 3)
+    images, labels = batches["test_batch"]
+    # CIFAR rows are channel-major: red plane, green plane, blue plane
+    np.testing.assert_array_equal(x_te[1, :, :, 2], images[1, 2048:].reshape(32, 32))
+    np.testing.assert_array_equal(y_te, labels)
+    assert y_tr.tolist() == sum((batches[f"data_batch_{i}"][1] for i in range(1, 6)), [])
+    ds = data.cifar10(directory=tmp_path)
+    assert ds.x_train.shape == (15, 32, 32, 3) and ds.num_classes == 10
+    np.testing.assert_allclose(ds.x_train.mean(axis=(0, 1, 2)), 0.0, atol=1e-4)
+
+
+def test_corrupt_cache_is_downloaded_again(tmp_path, monkeypatch):
+    good = b"the real file"
+    remote = data.RemoteFile(
+        "f.bin", ("https://a.example/f.bin",), data.hashlib.md5(good).hexdigest()
+    )
+    (tmp_path / "f.bin").write_bytes(good[:5])  # a partial download
+    calls = []
+
+    def fake_download(url, path):
+        calls.append(url)
+        Path(path).write_bytes(good)
+
+    monkeypatch.setattr(data, "download_url", fake_download)
+    assert data.fetch(remote, tmp_path).read_bytes() == good
+    assert calls == ["https://a.example/f.bin"]
+    data.fetch(remote, tmp_path)  # now valid: no second download
+    assert len(calls) == 1
+
+
+def test_wrong_checksum_from_every_mirror_is_an_error_and_leaves_no_file(tmp_path, monkeypatch):
+    remote = data.RemoteFile("f.bin", ("https://a/f", "https://b/f"), "0" * 32)
+    monkeypatch.setattr(data, "download_url", lambda url, path: Path(path).write_bytes(b"x"))
+    with pytest.raises(RuntimeError, match="checksum mismatch"):
+        data.fetch(remote, tmp_path)
+    assert not (tmp_path / "f.bin").exists()
+
+
+def test_offline_error_names_the_offline_datasets(tmp_path, monkeypatch):
+    def no_internet(url, path):
+        raise urllib.error.URLError("no route to host")
+
+    monkeypatch.setattr(data, "download_url", no_internet)
+    monkeypatch.setenv("SGB_DATA_DIR", str(tmp_path / "cache"))
+    with pytest.raises(RuntimeError) as error:
+        data.load("mnist")
+    assert "digits" in str(error.value) and "mnist1d" in str(error.value)
+    assert (tmp_path / "cache").is_dir()  # SGB_DATA_DIR chose the cache
+
+
+def test_load_rejects_unknown_names():
+    with pytest.raises(ValueError, match="cifar10"):
+        data.load("imagenet")
+
+
+def test_offline_datasets_shapes():
+    ds = data.load("digits")
+    assert ds.x_train.shape[1] == 64 and len(ds.x_train) + len(ds.x_test) == 1797
+    np.testing.assert_allclose(ds.x_train.mean(axis=0), 0.0, atol=1e-5)
