@@ -53,14 +53,15 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
         color=PALETTE["individuals"],
         label="individuals",
     )
-    ax.plot(
-        returns[a]["mean_network"].mean(),
-        returns[b]["mean_network"].mean(),
-        "*",
-        ms=14,
-        color=PALETTE["mean_network"],
-        label="mean network",
-    )
+    if "mean_network" in returns[a] and "mean_network" in returns[b]:
+        ax.plot(
+            returns[a]["mean_network"].mean(),
+            returns[b]["mean_network"].mean(),
+            "*",
+            ms=14,
+            color=PALETTE["mean_network"],
+            label="mean network",
+        )
     r = stats.pearson(x.mean(1), y.mean(1))
     ax.set_xlabel(f"return, {a.replace('_', ' ')}")
     ax.set_ylabel(f"return, {b.replace('_', ' ')}")
