@@ -93,7 +93,9 @@ class Genome:
         codes = layer_codes(sizes)
         self.sizes = tuple(int(s) for s in sizes)
         self.gnet = GNet(tuple(gnet_hidden))
-        self.inputs = [jnp.asarray(pair_inputs(a, b)) for a, b in zip(codes[:-1], codes[1:])]
+        self.inputs = [
+            jnp.asarray(pair_inputs(a, b)) for a, b in zip(codes[:-1], codes[1:], strict=True)
+        ]
         self.scales = [float(n) ** -0.5 for n in self.sizes[:-1]]
 
     def init(self, key: jax.Array) -> list[Any]:
@@ -110,32 +112,44 @@ class Genome:
             )
         ]
 
-    def fit_loss(self, gnet_params: list[Any], kernels: list[jnp.ndarray]) -> jnp.ndarray:
-        """Mean over layers of the mean squared error of the scaled kernels (dimensionless)."""
-        generated = self.generate_kernels(gnet_params)
-        errors = [
-            jnp.mean(((g - k) / s) ** 2)
-            for g, k, s in zip(generated, kernels, self.scales, strict=True)
-        ]
+    def fit_loss(
+        self, gnet_params: list[Any], kernels: list[jnp.ndarray], key: jax.Array, batch: int
+    ) -> jnp.ndarray:
+        """Mean over layers of the mean squared error of kernels times sqrt(fan-in)
+        (dimensionless), on ``batch`` synapses per layer drawn with ``key`` (all if fewer)."""
+        errors = []
+        for p, x, s, k, layer_key in zip(
+            gnet_params,
+            self.inputs,
+            self.scales,
+            kernels,
+            jax.random.split(key, len(kernels)),
+            strict=True,
+        ):
+            target = k.reshape(-1) / s
+            if batch < len(x):
+                idx = jax.random.randint(layer_key, (batch,), 0, len(x))
+                x, target = x[idx], target[idx]
+            errors.append(jnp.mean((self.gnet.apply(p, x) - target) ** 2))
         return sum(errors) / len(errors)
 
 
-def make_fit(genome: Genome, optimizer: optax.GradientTransformation, steps: int):
-    """A jitted ``fit(gnet_params, opt_state, kernels) -> (gnet_params, opt_state, loss)``
-    that takes ``steps`` full-batch optimizer steps on ``genome.fit_loss``."""
-    if steps < 1:
-        raise ValueError(f"steps must be >= 1, got {steps}")
+def make_fit(genome: Genome, optimizer: optax.GradientTransformation, steps: int, batch: int):
+    """A jitted ``fit(gnet_params, opt_state, kernels, key) -> (gnet_params, opt_state, loss)``
+    taking ``steps`` optimizer steps on ``genome.fit_loss`` with ``batch`` synapses per layer."""
+    if steps < 1 or batch < 1:
+        raise ValueError(f"steps and batch must be >= 1, got {steps}, {batch}")
 
     @jax.jit
-    def fit(gnet_params, opt_state, kernels):
-        def step(carry, _):
+    def fit(gnet_params, opt_state, kernels, key):
+        def step(carry, step_key):
             params, state = carry
-            loss, grads = jax.value_and_grad(genome.fit_loss)(params, kernels)
+            loss, grads = jax.value_and_grad(genome.fit_loss)(params, kernels, step_key, batch)
             updates, state = optimizer.update(grads, state, params)
             return (optax.apply_updates(params, updates), state), loss
 
         (gnet_params, opt_state), losses = jax.lax.scan(
-            step, (gnet_params, opt_state), None, length=steps
+            step, (gnet_params, opt_state), jax.random.split(key, steps)
         )
         return gnet_params, opt_state, losses[-1]
 
@@ -148,9 +162,12 @@ def fit_gnets(
     key: jax.Array,
     steps: int = 500,
     learning_rate: float = 1e-2,
+    batch: int = 4096,
 ) -> tuple[list[Any], float]:
     """Fit fresh g-nets to given kernels with Adam; returns (g-net params, final loss)."""
+    init_key, fit_key = jax.random.split(key)
     optimizer = optax.adam(learning_rate)
-    params = genome.init(key)
-    params, _, loss = make_fit(genome, optimizer, steps)(params, optimizer.init(params), kernels)
+    params = genome.init(init_key)
+    fit = make_fit(genome, optimizer, steps, batch)
+    params, _, loss = fit(params, optimizer.init(params), kernels, fit_key)
     return params, float(loss)

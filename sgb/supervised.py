@@ -30,11 +30,12 @@ from tqdm.auto import tqdm
 from sgb.compression import compression_ratio, dense_param_count, sgb_param_count
 from sgb.data import Dataset
 from sgb.dgb import Genome, dgb_param_count, make_fit
-from sgb.elbo import cross_entropy, elbo_loss
+from sgb.elbo import cross_entropy
 from sgb.layers import SGBMLP, KLCounting
-from sgb.population import apply_mean_network, apply_population
+from sgb.population import apply_mean_network, apply_population, init_params
 from sgb.priors import GaussianPrior, Prior
 from sgb.stats import sem
+from sgb.training import fit_elbo
 
 ModelKind = Literal["sgb", "dgb", "dense"]
 MODEL_KINDS: tuple[str, ...] = ("sgb", "dgb", "dense")
@@ -72,7 +73,7 @@ class DenseConfig:
 
     ``gnet_hidden``: hidden widths of each layer's g-net. A DGB alternates
     ``rounds`` times: p-net training for an equal share of all minibatch
-    steps, then ``fit_steps`` full-batch Adam steps fitting the g-nets, then
+    steps, then ``fit_steps`` Adam steps fitting the g-nets, then
     writing the generated kernels back into the p-net.
     """
 
@@ -83,7 +84,8 @@ class DenseConfig:
     epochs: int = 20
     rounds: int = 10
     fit_steps: int = 200
-    gnet_learning_rate: float = 3e-3
+    fit_batch: int = 4096
+    gnet_learning_rate: float = 1e-2
     seed: int = 0
     conv_features: tuple[int, ...] = ()
 
@@ -194,6 +196,7 @@ def _minibatches(n: int, batch_size: int, epochs: int, seed: int) -> Iterator[tu
 
 def _train_loop(state, step, data: Dataset, config, key, progress: bool, desc: str, hook=None):
     """Run ``step(state, x, y, key) -> (state, metrics)`` over minibatches; per-epoch means.
+    (``sgb.training.fit_elbo`` is the SGB's loop; this one also serves the DGB's fits.)
 
     ``hook(state, step_number) -> state`` runs after every step (the DGB's g-net fits).
     """
@@ -217,22 +220,6 @@ def _train_loop(state, step, data: Dataset, config, key, progress: bool, desc: s
     return state, history
 
 
-def _make_train_step(model: nn.Module, config: ClassifierConfig, n_train: int):
-    kl_weight = config.kl_scale / n_train
-
-    @jax.jit
-    def train_step(state: TrainState, x, y, key):
-        def loss_fn(params):
-            return elbo_loss(
-                model, params, x, y, key, num_samples=config.num_samples, kl_weight=kl_weight
-            )
-
-        (loss, parts), grads = jax.value_and_grad(loss_fn, has_aux=True)(state.params)
-        return state.apply_gradients(grads=grads), {"loss": loss, **parts}
-
-    return train_step
-
-
 def train_classifier(
     config: ClassifierConfig, data: Dataset, progress: bool = True
 ) -> tuple[nn.Module, Any, list[dict[str, float]]]:
@@ -240,14 +227,22 @@ def train_classifier(
     per-epoch history of loss, data term and KL)."""
     _check_training(config.epochs, config.batch_size)
     model = make_model(config, data.num_classes)
-    init_key, sample_key, key = jax.random.split(jax.random.key(config.seed), 3)
-    params = model.init({"params": init_key, "sample": sample_key}, data.x_train[:1])
-    state = TrainState.create(
-        apply_fn=model.apply, params=params, tx=optax.adam(config.learning_rate)
+    params = init_params(model, jax.random.key(config.seed), data.x_train[:1])
+    params, history = fit_elbo(
+        model,
+        params,
+        data.x_train,
+        data.y_train,
+        data_loss=cross_entropy,
+        kl_weight=config.kl_scale / len(data.x_train),
+        num_samples=config.num_samples,
+        learning_rate=config.learning_rate,
+        batch_size=config.batch_size,
+        epochs=config.epochs,
+        seed=config.seed,
+        progress=progress,
     )
-    train_step = _make_train_step(model, config, len(data.x_train))
-    state, history = _train_loop(state, train_step, data, config, key, progress, "SGB training")
-    return model, state.params, history
+    return model, params, history
 
 
 def _dense_step(state: TrainState, x, y, key):
@@ -293,15 +288,17 @@ def train_dense(
     )
     genome = Genome(sizes, config.gnet_hidden)
     optimizer = optax.adam(config.gnet_learning_rate)
-    fit = make_fit(genome, optimizer, config.fit_steps)
+    fit = make_fit(genome, optimizer, config.fit_steps, config.fit_batch)
     gnet = {"params": genome.init(gnet_key)}
     gnet["opt"] = optimizer.init(gnet["params"])
     gnet["mse"] = math.nan
+    gnet["key"] = jax.random.fold_in(gnet_key, 1)
     total = config.epochs * max(1, len(data.x_train) // config.batch_size)
 
     def write_back(state: TrainState) -> TrainState:
         kernels = [state.params["params"][f"dense_{i}"]["kernel"] for i in range(len(sizes) - 1)]
-        gnet["params"], gnet["opt"], mse = fit(gnet["params"], gnet["opt"], kernels)
+        gnet["key"], fit_key = jax.random.split(gnet["key"])
+        gnet["params"], gnet["opt"], mse = fit(gnet["params"], gnet["opt"], kernels, fit_key)
         gnet["mse"] = float(mse)
         return state.replace(
             params=_with_kernels(state.params, genome.generate_kernels(gnet["params"]))

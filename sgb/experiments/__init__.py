@@ -15,6 +15,7 @@ PROFILE_NAMES = ("smoke", "cpu", "paper")
 EXPERIMENTS: dict[str, str] = {
     "bbb": "bayes_by_backprop",
     "theory": "theory",
+    "fig2": "fig2",
     "fig3": "rl_fig3",
     "fig4": "rl_fig4",
     "fig5": "rl_fig5",
