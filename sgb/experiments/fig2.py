@@ -32,7 +32,7 @@ from sgb.supervised import (
 _SGB = ClassifierConfig(
     prior=GaussianPrior(0.1), kl_counting="table", kl_scale=1.0, num_samples=2, epochs=20
 )
-_DGB = DenseConfig(epochs=20, rounds=10, fit_steps=200, fit_batch=4096, gnet_learning_rate=1e-2)
+_DGB = DenseConfig(epochs=20, rounds=8, fit_steps=100, fit_batch=4096, gnet_learning_rate=1e-2)
 _MLP_RATIOS = (2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 
 
@@ -49,10 +49,12 @@ def _small_data_sweep(epochs: int) -> SweepConfig:
 
 
 def _ablation(sweep: SweepConfig) -> SweepConfig:
-    """The same SGB sweep at its lowest and highest ratio with the KL counted per synapse."""
+    """The same SGB sweep at its lowest and highest ratio, two seeds, the KL counted per
+    synapse."""
     return dataclasses.replace(
         sweep,
         ratios=(min(sweep.ratios), max(sweep.ratios)),
+        seeds=sweep.seeds[:2],
         models=("sgb",),
         sgb=dataclasses.replace(sweep.sgb, kl_counting="synapse"),
     )
@@ -89,8 +91,8 @@ _CIFAR_PAPER = SweepConfig(
 PROFILES: dict[str, dict[str, tuple[SweepConfig, SweepConfig | None]]] = {
     "smoke": {name: (_SMOKE, None) for name in ("digits", "mnist1d")},
     "cpu": {
-        "digits": (_small_data_sweep(20), _ablation(_small_data_sweep(20))),
-        "mnist1d": (_small_data_sweep(10), _ablation(_small_data_sweep(10))),
+        "digits": (_small_data_sweep(10), _ablation(_small_data_sweep(10))),
+        "mnist1d": (_small_data_sweep(6), _ablation(_small_data_sweep(6))),
         "mnist": (dataclasses.replace(_MNIST_PAPER, seeds=(0, 1, 2)), None),
     },
     "paper": {
