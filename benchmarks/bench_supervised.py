@@ -1,0 +1,89 @@
+"""Training throughput (samples/s) of SGB, DGB and the uncompressed network at the paper's
+MNIST shape, 784-800-10, batch 64, on random inputs.
+
+    python benchmarks/bench_supervised.py [--batches 40] [--hidden-types 50] [--gnet-width 50]
+
+Each model is trained for 1 and for 1 + R epochs of ``--batches`` minibatches;
+the difference excludes compilation. The DGB fits its g-nets once per epoch
+(``--fit-steps`` Adam steps on 4096 synapses per layer), so its rate includes them.
+"""
+
+import argparse
+import dataclasses
+import time
+
+import jax
+import numpy as np
+
+from sgb.compression import dense_param_count
+from sgb.data import Dataset
+from sgb.supervised import (
+    ClassifierConfig,
+    DenseConfig,
+    compression_of,
+    train_classifier,
+    train_dense,
+)
+
+
+def _timed(train, epochs: int) -> float:
+    start = time.perf_counter()
+    _, params, _ = train(epochs)
+    jax.block_until_ready(params)
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--batches", type=int, default=40, help="minibatches per epoch")
+    parser.add_argument("--repeats", type=int, default=3, help="timed epochs R")
+    parser.add_argument("--hidden-types", type=int, default=50)
+    parser.add_argument("--gnet-width", type=int, default=50)
+    parser.add_argument("--fit-steps", type=int, default=100)
+    args = parser.parse_args()
+
+    rng = np.random.default_rng(0)
+    n = 64 * args.batches
+    x = rng.normal(size=(n, 784)).astype(np.float32)
+    y = rng.integers(0, 10, n).astype(np.int32)
+    data = Dataset("random-mnist-shape", x, y, x[:256], y[:256], 10)
+    sizes = (784, 800, 10)
+    sgb = ClassifierConfig(
+        hidden=(800,), cell_types=(30, args.hidden_types, 10), kl_counting="table"
+    )
+    models = {
+        "uncompressed": (
+            lambda e: train_dense(DenseConfig(hidden=(800,), epochs=e), data, False),
+            1.0,
+        ),
+        "sgb": (
+            lambda e: train_classifier(dataclasses.replace(sgb, epochs=e), data, False),
+            compression_of("sgb", sizes, args.hidden_types, 30, 10),
+        ),
+        "dgb": (
+            lambda e: train_dense(
+                DenseConfig(
+                    hidden=(800,),
+                    gnet_hidden=(args.gnet_width,),
+                    epochs=e,
+                    rounds=e,
+                    fit_steps=args.fit_steps,
+                ),
+                data,
+                False,
+            ),
+            compression_of("dgb", sizes, args.gnet_width, 30, 10),
+        ),
+    }
+    print(f"backend {jax.default_backend()}, {dense_param_count(sizes)} uncompressed parameters")
+    rates = {}
+    for name, (train, ratio) in models.items():
+        elapsed = _timed(train, 1 + args.repeats) - _timed(train, 1)
+        rates[name] = args.repeats * n / elapsed
+        print(f"{name:>13}: compression {ratio:7.1f}  {rates[name]:9.0f} samples/s", flush=True)
+    for name in ("sgb", "dgb"):
+        print(f"{name} / uncompressed throughput: {rates[name] / rates['uncompressed']:.3f}")
+
+
+if __name__ == "__main__":
+    main()

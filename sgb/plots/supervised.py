@@ -1,0 +1,76 @@
+"""Chapter 4 figures: innate accuracy of DGB and SGB against compression (paper Figure 2)."""
+
+from collections.abc import Mapping
+from typing import Any
+
+import matplotlib.ticker as mticker
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
+
+from sgb.plots import PALETTE, subplots
+from sgb.supervised import summarise_sweep
+
+_LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
+
+
+def _band(ax: Axes, table: Mapping[str, list], color: str, label: str, **style) -> None:
+    x, mean = np.asarray(table["compression"]), np.asarray(table["mean"])
+    err = np.nan_to_num(np.asarray(table["sem"], dtype=float))
+    ax.plot(x, 100 * mean, color=color, label=label, marker="o", ms=4, **style)
+    ax.fill_between(x, 100 * (mean - err), 100 * (mean + err), color=color, alpha=0.2, lw=0)
+
+
+def _log_x(ax: Axes) -> None:
+    ax.set_xscale("log")
+    plain = mticker.FuncFormatter(lambda value, _: f"{value:g}")
+    ax.xaxis.set_major_formatter(plain)
+    ax.xaxis.set_minor_formatter(mticker.NullFormatter())
+
+
+def plot_accuracy_vs_compression(
+    ax: Axes, results: Mapping[str, Any], mean_network: bool = True
+) -> None:
+    """One dataset's panel: SGB and DGB mean innate test accuracy (%) +- SEM over seeds
+    against compression (log axis), the SGB's mean network and the uncompressed network."""
+    summary = results["summary"]
+    for kind in ("dgb", "sgb"):
+        if kind in summary:
+            _band(ax, summary[kind], PALETTE[kind], _LABELS[kind])
+    if mean_network and results.get("summary_mean_network", {}).get("sgb"):
+        table = results["summary_mean_network"]["sgb"]
+        _band(ax, table, PALETTE["mean_network"], "SGB mean network", ls="--")
+    if "dense" in summary:
+        base = 100 * np.mean(summary["dense"]["mean"])
+        ax.axhline(base, color=PALETTE["baseline"], ls=":", label="uncompressed network")
+    for point in results.get("crossovers", []):
+        ax.axvline(point, color="k", lw=0.8, alpha=0.5)
+    _log_x(ax)
+    ax.set_xlabel("compression ratio (uncompressed / genome parameters)")
+    ax.set_ylabel("innate test accuracy (%)")
+    ax.set_title(str(results["dataset"]))
+
+
+def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]]) -> Figure:
+    """Figure 2: one panel per dataset; a thin vertical line marks each SGB/DGB crossover."""
+    fig, axes = subplots(
+        1, len(results_by_dataset), figsize=(5.2 * len(results_by_dataset), 4.0), squeeze=False
+    )
+    for ax, results in zip(axes[0], results_by_dataset.values(), strict=True):
+        plot_accuracy_vs_compression(ax, results)
+    axes[0, 0].legend(fontsize=8, loc="lower left")
+    return fig
+
+
+def plot_kl_counting(ax: Axes, results: Mapping[str, Any]) -> None:
+    """SGB innate accuracy with the KL counted per type pair (the sweep) and per synapse
+    (the ablation), at the ablation's compression ratios, mean +- SEM over seeds."""
+    table = summarise_sweep([r for r in results["records"] if r["model"] == "sgb"])["sgb"]
+    ablation = summarise_sweep(results["ablation_records"])["sgb"]
+    _band(ax, table, PALETTE["sgb"], "KL per type pair (genome)")
+    _band(ax, ablation, PALETTE["individuals"], "KL per synapse (Bayes by backprop)", ls="--")
+    _log_x(ax)
+    ax.set_xlabel("compression ratio")
+    ax.set_ylabel("innate test accuracy (%)")
+    ax.set_title(f"{results['dataset']}: how the KL is counted")
+    ax.legend(fontsize=8)
