@@ -139,7 +139,16 @@ def variant_xml(name: str, variant: str) -> str:
 
 @functools.cache
 def make_env(spec: EnvSpec) -> brax.envs.Env:
-    """The Brax environment of ``spec`` (cached: one object per spec, so jit caches hit)."""
+    """The Brax environment of ``spec`` (cached: one object per spec, so jit caches hit).
+
+    Built eagerly even when first called inside a jitted function, so the
+    cached system holds concrete arrays, never tracers.
+    """
+    with jax.ensure_compile_time_eval():
+        return _build_env(spec)
+
+
+def _build_env(spec: EnvSpec) -> brax.envs.Env:
     kwargs = {"backend": spec.backend}
     if spec.name == "ant" and spec.variant == "long_legs":
         kwargs["healthy_z_range"] = (0.2, 1.0 * LEG_SCALE)
