@@ -26,11 +26,11 @@ def test_correlation_and_paired_test_on_known_populations():
         "normal": {"individuals": skill[:, None] + 0.1 * rng.normal(size=(60, 3))},
         "long_legs": {"individuals": skill[:, None] + 0.1 * rng.normal(size=(60, 3))},
         "slippery": {"individuals": rng.normal(size=(60, 3))},
-        "payload": {"individuals": rng.normal(size=(60, 3))},
+        "low_gravity": {"individuals": rng.normal(size=(60, 3))},
     }
     returns["normal"]["mean_network"] = returns["normal"]["individuals"] - 1.0
     assert rl.compare(returns, "normal", "long_legs")["r"] > 0.9
-    assert abs(rl.compare(returns, "slippery", "payload")["r"]) < 0.4
+    assert abs(rl.compare(returns, "slippery", "low_gravity")["r"]) < 0.4
     test = rl.individuals_vs_mean(returns)
     assert test["t"] > 10 and test["dof"] == 59
 

@@ -49,7 +49,7 @@ class PopulationConfig:
     episodes: int = 5
     episode_length: int = 1000
     seed: int = 0
-    conditions: tuple[str, ...] = field(default=("normal", "long_legs", "slippery", "payload"))
+    conditions: tuple[str, ...] = field(default=("normal", "long_legs", "slippery", "low_gravity"))
     mean_network_conditions: tuple[str, ...] = ("normal",)
 
 
@@ -216,7 +216,7 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     results = {"returns": returns}
     if figure == "fig4":
         results["legs"] = compare(returns, "normal", "long_legs")
-        results["niches"] = compare(returns, "slippery", "payload")
+        results["niches"] = compare(returns, "slippery", "low_gravity")
     else:
         results["mean_network"] = individuals_vs_mean(returns)
     record = provenance(config, profile, [config.seed], time.perf_counter() - start)
