@@ -68,7 +68,16 @@ def plot_kl_counting(ax: Axes, results: Mapping[str, Any]) -> None:
     table = summarise_sweep([r for r in results["records"] if r["model"] == "sgb"])["sgb"]
     ablation = summarise_sweep(results["ablation_records"])["sgb"]
     _band(ax, table, PALETTE["sgb"], "KL per type pair (genome)")
-    _band(ax, ablation, PALETTE["individuals"], "KL per synapse (Bayes by backprop)", ls="--")
+    ax.errorbar(
+        ablation["compression"],
+        100 * np.asarray(ablation["mean"]),
+        yerr=100 * np.nan_to_num(np.asarray(ablation["sem"], dtype=float)),
+        color=PALETTE["individuals"],
+        marker="s",
+        ls="none",
+        capsize=3,
+        label="KL per synapse (Bayes by backprop)",
+    )
     _log_x(ax)
     ax.set_xlabel("compression ratio")
     ax.set_ylabel("innate test accuracy (%)")
