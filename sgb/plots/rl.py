@@ -32,7 +32,7 @@ def plot_sweep(summary: list[dict], env: str, ax=None):
     ax.set_xlabel("cell types per hidden layer")
     ax.set_ylabel("return / vanilla return")
     ax.set_title(env)
-    ax.legend(loc="lower right")
+    ax.legend(loc="best", fontsize=8)
     return ax
 
 
