@@ -155,9 +155,14 @@ def parse_cifar10_tar(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
 def _standardise(
     x_train: np.ndarray, x_test: np.ndarray, axis: int | tuple[int, ...] | None = 0
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Shift and scale by the training set's mean and std along ``axis`` (None: global)."""
+    """Shift and scale by the training set's mean and std along ``axis`` (None: global).
+
+    A feature that is constant on the training set is only shifted (scale 1): dividing by
+    its zero std would turn any test value off that constant into an enormous input.
+    """
     mean = x_train.mean(axis=axis)
-    std = x_train.std(axis=axis) + 1e-6
+    std = x_train.std(axis=axis)
+    std = np.where(std > 0.0, std, 1.0)
     return ((x_train - mean) / std).astype(np.float32), ((x_test - mean) / std).astype(np.float32)
 
 

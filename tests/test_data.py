@@ -134,3 +134,15 @@ def test_offline_datasets_shapes():
     ds = data.load("digits")
     assert ds.x_train.shape[1] == 64 and len(ds.x_train) + len(ds.x_test) == 1797
     np.testing.assert_allclose(ds.x_train.mean(axis=0), 0.0, atol=1e-5)
+
+
+def test_features_constant_on_the_training_set_stay_bounded():
+    # Digits' corner pixels are zero in (almost) every training image; a test image that
+    # inks one must not become an input of size 1e6.
+    x_train = np.array([[0.0, 1.0], [0.0, 3.0]])
+    x_test = np.array([[16.0, 2.0]])
+    train, test = data._standardise(x_train, x_test)
+    np.testing.assert_allclose(train, [[0.0, -1.0], [0.0, 1.0]])
+    np.testing.assert_allclose(test, [[16.0, 0.0]])
+    ds = data.load("digits")
+    assert np.abs(ds.x_test).max() < 100.0
