@@ -55,3 +55,8 @@ def test_cli_reports_a_bad_profile_without_a_traceback(capsys):
     with pytest.raises(SystemExit):
         main(["reproduce", "bbb", "--profile", "huge"])
     assert "invalid choice" in capsys.readouterr().err
+
+
+def test_cli_rejects_an_option_the_experiment_does_not_take(capsys):
+    assert main(["reproduce", "bbb", "--dataset", "mnist"]) == 2
+    assert "bbb does not take --dataset" in capsys.readouterr().err
