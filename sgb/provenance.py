@@ -24,14 +24,18 @@ def package_versions() -> dict[str, str]:
 
 
 def git_commit() -> str:
-    """The commit of the working tree (with ``+dirty`` if it has changes), or "unknown"."""
+    """The commit of the working tree, or "unknown".
+
+    ``+dirty`` marks changes to tracked files outside ``results/`` (results files written
+    by an earlier experiment of the same run do not count).
+    """
     root = Path(__file__).resolve().parent.parent
     try:
         commit = subprocess.run(
             ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True
         ).stdout.strip()
         dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no"],
+            ["git", "status", "--porcelain", "--untracked-files=no", "--", ".", ":!results"],
             cwd=root,
             capture_output=True,
             text=True,
