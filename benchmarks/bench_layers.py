@@ -1,6 +1,7 @@
 """Time of one SGB training step relative to a plain Flax Dense network of the same shape.
 
-Network 784-800-800-10, batch 64, Adam, one weight sample per step (S = 1) unless stated.
+Network 784-800-800-10, batch 64, Adam, one weight sample per step (S = 1) unless stated;
+"local" rows draw pre-activations instead of weights (``local_reparam=True``).
 All timings are taken in this one run, interleaved, and reported as medians:
     python benchmarks/bench_layers.py [--repeats 30]
 """
@@ -54,15 +55,21 @@ def build_candidates():
     dense = DenseMLP()
     dense_params = dense.init(key, x)
     candidates = {"dense": (lambda p, x, y, k: cross_entropy(dense.apply(p, x), y), dense_params)}
-    for label, types, samples in (
-        ("SGB k = n (BNN), S = 1", (None, None, None, None), 1),
-        ("SGB 30-100-100-10 types, S = 1", (30, 100, 100, 10), 1),
-        ("SGB 30-100-100-10 types, S = 4", (30, 100, 100, 10), 4),
+    bnn, typed = (None, None, None, None), (30, 100, 100, 10)
+    for label, types, samples, local in (
+        ("SGB k = n (BNN), S = 1", bnn, 1, False),
+        ("SGB k = n (BNN), S = 1, local", bnn, 1, True),
+        ("SGB 30-100-100-10 types, S = 1", typed, 1, False),
+        ("SGB 30-100-100-10 types, S = 1, local", typed, 1, True),
+        ("SGB 30-100-100-10 types, S = 4", typed, 4, False),
+        ("SGB 30-100-100-10 types, S = 4, local", typed, 4, True),
     ):
         model = SGBMLP(widths=SIZES[1:], cell_types=types)
 
-        def loss(p, x, y, k, model=model, samples=samples):
-            return elbo_loss(model, p, x, y, k, num_samples=samples, kl_weight=1 / 60_000)[0]
+        def loss(p, x, y, k, model=model, samples=samples, local=local):
+            return elbo_loss(
+                model, p, x, y, k, num_samples=samples, kl_weight=1 / 60_000, local_reparam=local
+            )[0]
 
         candidates[label] = (loss, init_params(model, key, x))
     return candidates
@@ -92,10 +99,10 @@ def main() -> None:
     dense_ms = 1e3 * np.median(states["dense"][3])
     print(f"backend {jax.default_backend()}, versions {package_versions()}")
     print(f"network {'-'.join(map(str, SIZES))}, batch {BATCH}, {args.repeats} repeats")
-    print(f"{'model':<34} {'median ms/step':>15} {'ratio to dense':>15}")
+    print(f"{'model':<40} {'median ms/step':>15} {'ratio to dense':>15}")
     for name, (*_, times) in states.items():
         ms = 1e3 * np.median(times)
-        print(f"{name:<34} {ms:>15.2f} {ms / dense_ms:>15.2f}")
+        print(f"{name:<40} {ms:>15.2f} {ms / dense_ms:>15.2f}")
 
 
 if __name__ == "__main__":

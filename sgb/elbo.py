@@ -37,18 +37,25 @@ def elbo_loss(
     num_samples: int,
     kl_weight: float,
     data_loss: Callable[[jnp.ndarray, jnp.ndarray], jnp.ndarray] = cross_entropy,
+    local_reparam: bool = False,
 ) -> tuple[jnp.ndarray, dict]:
     """Negative ELBO per training example and its parts ``{"data", "kl"}``.
 
     ``num_samples`` (S) individuals are drawn with keys split from ``key``;
     their data terms and KLs are averaged. The samples run one after another
     (``lax.map``): on CPU that measured about twice as fast as ``vmap`` for S = 4.
+    ``local_reparam=True`` draws pre-activations instead of weights (see ``sgb.layers``);
+    the model must accept that keyword.
     """
     if num_samples < 1:
         raise ValueError(f"num_samples must be >= 1, got {num_samples}")
 
+    options = {"local_reparam": True} if local_reparam else {}
+
     def one_sample(sample_key):
-        outputs, state = model.apply(params, x, rngs={"sample": sample_key}, mutable=["losses"])
+        outputs, state = model.apply(
+            params, x, rngs={"sample": sample_key}, mutable=["losses"], **options
+        )
         return data_loss(outputs, y), sown_kl(state)
 
     data, kl = jax.lax.map(one_sample, jax.random.split(key, num_samples))

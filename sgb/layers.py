@@ -10,6 +10,14 @@ initialises a model's parameters alone.
 
 With as many types as neurons the layer is a Bayes-by-backprop layer; with one
 type per side, one distribution for the whole layer.
+
+``SGBDense`` and ``SGBMLP`` also take ``local_reparam=True`` (Kingma, Salimans and
+Welling, 2015): instead of one weight matrix shared by the batch, each example's
+pre-activations are drawn from their exact Gaussian, mean x @ mu and variance
+x^2 @ sigma^2, summed over type blocks so the full matrix is never formed. Every
+example then sees its own independent weights: an unbiased, lower-variance estimate
+of the ELBO's data term for training, but not an individual (evaluate individuals
+with the default path).
 """
 
 from collections.abc import Sequence
@@ -19,7 +27,7 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from sgb.celltypes import block_counts, expand_table
+from sgb.celltypes import assign_cell_types, block_counts, expand_table, type_sizes
 from sgb.priors import GaussianPrior, Prior
 
 KLCounting = Literal["synapse", "table"]
@@ -48,14 +56,41 @@ def genome_kl(
     """
     counts = jnp.asarray(block_counts(kernel.shape, mu.shape), dtype=kernel.dtype)
     if isinstance(prior, GaussianPrior):
-        per_pair = prior.kl(mu, sigma)
-        return jnp.sum(per_pair * counts) if counting == "synapse" else jnp.sum(per_pair)
+        return _count_pairs(prior.kl(mu, sigma), counts, counting)
     mu_full = expand_table(mu, kernel.shape)
     sigma_full = expand_table(sigma, kernel.shape)
     per_synapse = prior.kl(mu_full, sigma_full, kernel)
     if counting == "synapse":
         return jnp.sum(per_synapse)
     return jnp.sum(per_synapse / expand_table(counts, kernel.shape))
+
+
+def _count_pairs(per_pair: jnp.ndarray, counts: jnp.ndarray, counting: KLCounting) -> jnp.ndarray:
+    """Total KL from per-type-pair terms: weighted by synapses per pair, or once each."""
+    return jnp.sum(per_pair * counts) if counting == "synapse" else jnp.sum(per_pair)
+
+
+def _sum_by_type(x: jnp.ndarray, types: int) -> jnp.ndarray:
+    """(..., n) -> (..., types): the sum of each cell type's contiguous block of neurons."""
+    n = x.shape[-1]
+    if types == n:
+        return x
+    ids = jnp.asarray(assign_cell_types(n, types))
+    summed = jax.ops.segment_sum(jnp.moveaxis(x, -1, 0), ids, types, indices_are_sorted=True)
+    return jnp.moveaxis(summed, 0, -1)
+
+
+def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarray:
+    """``x @ expand_table(table, (n_in, features))`` without forming the full matrix.
+
+    ``x``: (..., n_in); ``table``: (k_in, k_out). Returns (..., features), at a cost of
+    O(n_in + k_in * k_out + features) per example instead of O(n_in * features).
+    """
+    k_in, k_out = table.shape
+    y = _sum_by_type(x, k_in) @ table
+    if k_out == features:
+        return y
+    return jnp.repeat(y, type_sizes(features, k_out), axis=-1, total_repeat_length=features)
 
 
 def _replace(_previous, new):
@@ -74,10 +109,22 @@ class _GenomeKernel(nn.Module):
     rho_init: float
 
     @nn.compact
-    def __call__(self, mean_network: bool) -> jnp.ndarray:
+    def __call__(
+        self, mean_network: bool, tables_only: bool = False
+    ) -> jnp.ndarray | tuple[jnp.ndarray, jnp.ndarray]:
+        """The drawn kernel (the mean kernel if ``mean_network``); with ``tables_only``,
+        the type tables (mu, sigma) instead, the KL estimated from one draw per type pair."""
         mu = self.param("mu", nn.initializers.normal(self.mean_init_std), self.types)
         rho = self.param("rho", nn.initializers.constant(self.rho_init), self.types)
         sigma = jax.nn.softplus(rho)
+        if tables_only:
+            if not mean_network:
+                eps = jax.random.normal(self.make_rng("sample"), self.types, mu.dtype)
+                counts = jnp.asarray(block_counts(self.shape, self.types), dtype=mu.dtype)
+                per_pair = self.prior.kl(mu, sigma, mu + sigma * eps)
+                kl = _count_pairs(per_pair, counts, self.kl_counting)
+                self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
+            return mu, sigma
         mu_full = expand_table(mu, self.shape)
         if mean_network:
             kernel = mu_full
@@ -106,7 +153,9 @@ class SGBDense(nn.Module):
     rho_init: float = -5.0
 
     @nn.compact
-    def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+    def __call__(
+        self, x: jnp.ndarray, mean_network: bool = False, local_reparam: bool = False
+    ) -> jnp.ndarray:
         n_in = x.shape[-1]
         if self.features <= 0:
             raise ValueError(f"features must be positive, got {self.features}")
@@ -114,7 +163,7 @@ class SGBDense(nn.Module):
         k_out = self.features if self.out_types is None else self.out_types
         _check_types("in_types", k_in, n_in)
         _check_types("out_types", k_out, self.features)
-        kernel = _GenomeKernel(
+        genome = _GenomeKernel(
             shape=(n_in, self.features),
             types=(k_in, k_out),
             prior=self.prior,
@@ -122,9 +171,17 @@ class SGBDense(nn.Module):
             mean_init_std=self.mean_init_std / n_in**0.5,
             rho_init=self.rho_init,
             name="genome",
-        )(mean_network)
+        )
         bias = self.param("bias", nn.initializers.zeros, (self.features,))
-        return x @ kernel + bias
+        if not local_reparam:
+            return x @ genome(mean_network) + bias
+        mu, sigma = genome(mean_network, tables_only=True)
+        y = type_matmul(x, mu, self.features) + bias
+        if mean_network:
+            return y
+        variance = type_matmul(x**2, sigma**2, self.features)
+        noise = jax.random.normal(self.make_rng("sample"), y.shape, y.dtype)
+        return y + jnp.sqrt(jnp.maximum(variance, 1e-30)) * noise
 
 
 class SGBConv(nn.Module):
@@ -180,7 +237,9 @@ class SGBMLP(nn.Module):
     rho_init: float = -5.0
 
     @nn.compact
-    def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+    def __call__(
+        self, x: jnp.ndarray, mean_network: bool = False, local_reparam: bool = False
+    ) -> jnp.ndarray:
         if len(self.cell_types) != len(self.widths) + 1:
             raise ValueError(
                 f"cell_types needs {len(self.widths) + 1} entries (input and every layer), "
@@ -194,7 +253,7 @@ class SGBMLP(nn.Module):
                 prior=self.prior,
                 kl_counting=self.kl_counting,
                 rho_init=self.rho_init,
-            )(x, mean_network)
+            )(x, mean_network, local_reparam)
             if i < len(self.widths) - 1:
                 x = nn.relu(x)
         return x

@@ -49,7 +49,9 @@ class ClassifierConfig:
     layer and the output (``None`` = one type per neuron, a plain BNN layer).
     ``conv_features``: output channels of deterministic 3x3 conv + 2x2 max-pool
     layers before the dense stack (empty: none, the input is a feature vector).
-    ``kl_scale`` multiplies the per-example KL weight 1/n_train.
+    ``kl_scale`` multiplies the per-example KL weight 1/n_train. ``local_reparam`` trains
+    with per-example pre-activation noise (``sgb.layers``); evaluation always samples
+    whole individuals.
     """
 
     hidden: tuple[int, ...] = (64,)
@@ -65,6 +67,7 @@ class ClassifierConfig:
     eval_individuals: int = 10
     seed: int = 0
     conv_features: tuple[int, ...] = ()
+    local_reparam: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -132,12 +135,14 @@ class SGBConvClassifier(nn.Module):
     rho_init: float = -5.0
 
     @nn.compact
-    def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+    def __call__(
+        self, x: jnp.ndarray, mean_network: bool = False, local_reparam: bool = False
+    ) -> jnp.ndarray:
         x = ConvTrunk(tuple(self.conv_features), name="trunk")(x)
         head = SGBMLP(
             self.widths, self.cell_types, self.prior, self.kl_counting, self.rho_init, name="head"
         )
-        return head(x, mean_network)
+        return head(x, mean_network, local_reparam)
 
 
 def dense_sizes(
@@ -240,6 +245,7 @@ def train_classifier(
         batch_size=config.batch_size,
         epochs=config.epochs,
         seed=config.seed,
+        local_reparam=config.local_reparam,
         progress=progress,
     )
     return model, params, history

@@ -29,12 +29,14 @@ def fit_elbo(
     batch_size: int,
     epochs: int,
     seed: int,
+    local_reparam: bool = False,
     progress: bool = True,
 ) -> tuple[Any, list[dict[str, float]]]:
     """Train ``params`` on (x, y) for ``epochs`` passes of shuffled minibatches.
 
     Returns the trained params and one dict per epoch with the mean ``loss``,
-    ``data`` and ``kl`` terms over its minibatches.
+    ``data`` and ``kl`` terms over its minibatches. ``local_reparam`` selects the
+    gradient estimator of ``sgb.elbo.elbo_loss``.
     """
     if epochs < 1 or batch_size < 1:
         raise ValueError(f"epochs and batch_size must be >= 1, got {epochs}, {batch_size}")
@@ -52,6 +54,7 @@ def fit_elbo(
                 num_samples=num_samples,
                 kl_weight=kl_weight,
                 data_loss=data_loss,
+                local_reparam=local_reparam,
             )
 
         (loss, parts), grads = jax.value_and_grad(loss_fn, has_aux=True)(state.params)

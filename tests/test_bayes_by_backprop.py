@@ -9,8 +9,9 @@ from sgb.experiments.bayes_by_backprop import PROFILES, classifier_variants, fit
 from sgb.supervised import train_and_evaluate
 
 
-def test_smoke_sgb_classifier_on_digits_beats_80_percent():
-    config = classifier_variants(PROFILES["smoke"])["SGB, KL per synapse"]
+@pytest.mark.parametrize("variant", ["SGB, KL per synapse", "SGB, KL per type pair, local"])
+def test_smoke_sgb_classifier_on_digits_beats_80_percent(variant):
+    config = classifier_variants(PROFILES["smoke"])[variant]
     assert config.cell_types[1] < config.hidden[0]  # the hidden layer really is compressed
     result = train_and_evaluate(config, digits(seed=0), progress=False)
     accuracy = result["accuracy"]

@@ -54,3 +54,23 @@ def test_bad_spec_raises():
         EnvSpec("ant", "spring", "moon")
     with pytest.raises(ValueError, match="ant only"):
         EnvSpec("halfcheetah", "spring", "long_legs")
+
+
+def test_ppo_on_the_ant_compiles_its_training_step_once():
+    # Brax's step returns weakly typed leaves; left as they are, the second chunk of
+    # iterations would compile the whole training step again.
+    from sgb.rl.ppo import PPOConfig, train, train_iterations
+
+    config = PPOConfig(
+        env=EnvSpec("ant", "spring"),
+        total_steps=3 * 8 * 4,
+        num_envs=8,
+        unroll_length=4,
+        num_minibatches=2,
+        num_evals=3,
+        eval_individuals=2,
+        episode_length=8,
+    )
+    before = train_iterations._cache_size()
+    train(config, seed=0, progress=False)
+    assert train_iterations._cache_size() == before + 1

@@ -88,7 +88,8 @@ def fit_regression(config: BBBConfig, seed: int = 0, progress: bool = True) -> d
 
 
 def classifier_variants(config: BBBConfig) -> dict[str, ClassifierConfig]:
-    """The classifiers compared: a plain BNN, and the compressed SGB with either KL counting."""
+    """The classifiers compared: a plain BNN, the compressed SGB with either KL counting,
+    and the last trained with the local reparameterisation."""
     base = config.classifier
     full = (None,) * (len(base.hidden) + 2)
     return {
@@ -96,6 +97,9 @@ def classifier_variants(config: BBBConfig) -> dict[str, ClassifierConfig]:
         "SGB, KL per synapse": dataclasses.replace(base, cell_types=config.compressed_types),
         "SGB, KL per type pair": dataclasses.replace(
             base, cell_types=config.compressed_types, kl_counting="table"
+        ),
+        "SGB, KL per type pair, local": dataclasses.replace(
+            base, cell_types=config.compressed_types, kl_counting="table", local_reparam=True
         ),
     }
 

@@ -232,7 +232,7 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
     )
     env_state = jax.jit(jax.vmap(env.reset))(jax.random.split(kr, config.num_envs))
     # strong types, as the training step returns them (weak types would force a recompile)
-    env_state = jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype=x.dtype), env_state)
+    env_state = jax.tree_util.tree_map(_strong, env_state)
     e = config.num_envs
     return TrainState(
         params=params,
@@ -321,7 +321,15 @@ def train_iterations(ts: TrainState, config: PPOConfig, n: int):
         return _sgd(ts, data, config)
 
     ts, metrics = jax.lax.scan(body, ts, None, n)
+    # Brax's step returns a few weakly typed leaves; strong types keep the next call's
+    # signature equal to this one's, so it does not compile again.
+    ts = ts._replace(env_state=jax.tree_util.tree_map(_strong, ts.env_state))
     return ts, jax.tree_util.tree_map(lambda m: m[-1], metrics)
+
+
+def _strong(x: jnp.ndarray) -> jnp.ndarray:
+    """``x`` with the same dtype but no weak type."""
+    return jnp.asarray(x, dtype=x.dtype)
 
 
 def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: int) -> float:
