@@ -4,7 +4,8 @@ MNIST shape, 784-800-10, batch 64, on random inputs.
     python benchmarks/bench_supervised.py [--batches 40] [--hidden-types 50] [--gnet-width 50]
 
 Each model is trained for 1 and for 1 + R epochs of ``--batches`` minibatches;
-the difference excludes compilation. The DGB fits its g-nets once per epoch
+the difference excludes compilation. "sgb local" trains the same SGB with the local
+reparameterisation (``local_reparam=True``). The DGB fits its g-nets once per epoch
 (``--fit-steps`` Adam steps on 4096 synapses per layer), so its rate includes them.
 """
 
@@ -60,6 +61,12 @@ def main() -> None:
             lambda e: train_classifier(dataclasses.replace(sgb, epochs=e), data, False),
             compression_of("sgb", sizes, args.hidden_types, 30, 10),
         ),
+        "sgb local": (
+            lambda e: train_classifier(
+                dataclasses.replace(sgb, epochs=e, local_reparam=True), data, False
+            ),
+            compression_of("sgb", sizes, args.hidden_types, 30, 10),
+        ),
         "dgb": (
             lambda e: train_dense(
                 DenseConfig(
@@ -81,7 +88,7 @@ def main() -> None:
         elapsed = _timed(train, 1 + args.repeats) - _timed(train, 1)
         rates[name] = args.repeats * n / elapsed
         print(f"{name:>13}: compression {ratio:7.1f}  {rates[name]:9.0f} samples/s", flush=True)
-    for name in ("sgb", "dgb"):
+    for name in ("sgb", "sgb local", "dgb"):
         print(f"{name} / uncompressed throughput: {rates[name] / rates['uncompressed']:.3f}")
 
 
