@@ -13,7 +13,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m sgb",
         epilog="fig2 takes --dataset (digits, mnist1d offline; mnist, cifar10 downloaded); "
-        "fig3, fig4 and fig5 take --env (ant, halfcheetah).",
+        "fig3 takes --env (ant, halfcheetah); fig4, fig5 and spread take --env ant.",
     )
     commands = parser.add_subparsers(dest="command", required=True)
     reproduce = commands.add_parser("reproduce", help="run an experiment and write its results")

@@ -19,6 +19,7 @@ EXPERIMENTS: dict[str, str] = {
     "fig3": "rl_fig3",
     "fig4": "rl_fig4",
     "fig5": "rl_fig5",
+    "spread": "rl_spread",
 }
 
 

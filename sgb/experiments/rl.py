@@ -23,6 +23,7 @@ from sgb.provenance import provenance, write_results
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import NetworkConfig
+from sgb.rl.normalizer import Normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig, train
 
@@ -158,13 +159,20 @@ def evaluate_conditions(config: PopulationConfig, results_dir: Path) -> dict:
     """Returns (N, episodes) of the individuals on every condition, and of the mean network
     (on the same initial states) on ``mean_network_conditions``."""
     ppo, params, normalizer, _ = checkpoints.load(Path(results_dir) / config.checkpoint)
+    return population_on(ppo, params.actor, normalizer, config)
+
+
+def population_on(
+    ppo: PPOConfig, actor_params: dict, normalizer: Normalizer, config: PopulationConfig
+) -> dict:
+    """``evaluate_conditions`` for an agent in memory: ``ppo`` gives its env and network."""
     out = {}
     for variant in config.conditions:
         spec = replace(ppo.env, variant=variant)
         common = (
             spec,
             ppo.network,
-            params.actor,
+            actor_params,
             normalizer,
             config.n_individuals,
             config.episodes,
