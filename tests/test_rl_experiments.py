@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from sgb.experiments import get_experiment, rl
+from sgb.experiments import get_experiment, rl, rl_spread
+from sgb.provenance import read_results
 
 
 def test_summary_divides_by_the_mean_vanilla_return():
@@ -36,7 +37,7 @@ def test_correlation_and_paired_test_on_known_populations():
 
 
 def test_registered_profiles():
-    for name in ("fig3", "fig4", "fig5"):
+    for name in ("fig3", "fig4", "fig5", "spread"):
         module = get_experiment(name)
         assert set(module.PROFILES) == {"smoke", "cpu", "paper"}
     paper = rl.sweep_config("ant", "paper")
@@ -50,3 +51,33 @@ def test_bad_env_raises():
         rl.sweep_config("hopper", "cpu")
     with pytest.raises(ValueError, match="env"):
         rl.run_fig4("smoke", ".", env="halfcheetah")
+
+
+def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
+    def run(rho, seed, individuals, mean_network):
+        return {
+            "rho_init": rho,
+            "sigma_init": float(np.log1p(np.exp(rho))),
+            "seed": seed,
+            "sigma_trained": 0.1,
+            "individuals_mean": individuals,
+            "individuals_sd": 2.0,
+            "mean_network_mean": mean_network,
+        }
+
+    # seeds differ a lot in level, but each population is 5 above its own mean network
+    runs = [run(-5.0, s, 100.0 * s + 5.0, 100.0 * s) for s in range(3)]
+    runs += [run(-2.0, 0, 40.0, 50.0), run(-2.0, 1, 45.0, 50.0)]
+    narrow, wide = rl_spread.summarize_spread(runs)
+    assert narrow["advantage"] == 5.0 and narrow["sem_advantage"] == 0.0
+    assert narrow["n_seeds"] == 3 and wide["n_seeds"] == 2
+    assert wide["advantage"] == -7.5 and np.isclose(wide["sem_advantage"], 2.5)
+
+
+def test_spread_smoke_run_trains_and_evaluates_wider_genomes(tmp_path):
+    summary = read_results(rl_spread.run("smoke", tmp_path))["results"]["summary"]
+    narrow, wide = summary
+    assert narrow["rho_init"] < wide["rho_init"]
+    assert wide["sigma_trained"] > 10 * narrow["sigma_trained"]
+    # wider genomes make more diverse individuals
+    assert wide["individuals_sd"] > narrow["individuals_sd"]

@@ -1,5 +1,5 @@
 """Figures of chapter 5: cell-type sweeps (Fig. 3C/D), population scatters (4E/F), mean network (5),
-and drawings of the Ant's body."""
+the initial-spread sweep, and drawings of the Ant's body."""
 
 import mujoco
 import numpy as np
@@ -89,6 +89,32 @@ def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
     ax.set_title(f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p_value:.2g}")
     ax.legend(loc="lower right")
     return ax
+
+
+def plot_spread(summary: list[dict], axes=None):
+    """Against the initial sigma (log axis): the individuals' mean return minus the mean
+    network's (left) and the standard deviation of the individuals' returns (right);
+    bars are the SEM over seeds."""
+    if axes is None:
+        _, axes = subplots(1, 2, figsize=(10, 3.8))
+    sigma = [r["sigma_init"] for r in summary]
+    axes[0].errorbar(
+        sigma,
+        [r["advantage"] for r in summary],
+        yerr=[r["sem_advantage"] for r in summary],
+        marker="o",
+        capsize=3,
+        color=PALETTE["individuals"],
+    )
+    axes[0].axhline(0.0, color=PALETTE["mean_network"], ls="--", label="mean network")
+    axes[0].set_ylabel("individuals - mean network (return)")
+    axes[0].legend(loc="best", fontsize=8)
+    axes[1].plot(sigma, [r["individuals_sd"] for r in summary], "o-", color=PALETTE["sgb"])
+    axes[1].set_ylabel("SD of individuals' returns")
+    for ax in axes:
+        ax.set_xscale("log")
+        ax.set_xlabel("initial sigma of every type pair")
+    return axes
 
 
 def _capsules(xml: str) -> list[tuple[np.ndarray, np.ndarray, float]]:
