@@ -63,19 +63,25 @@ def summarize_spread(runs: list[dict]) -> list[dict]:
     for rho in dict.fromkeys(r["rho_init"] for r in runs):
         group = [r for r in runs if r["rho_init"] == rho]
         advantage = np.array([r["individuals_mean"] - r["mean_network_mean"] for r in group])
+        diversity = np.array([r["individuals_sd"] for r in group])
         out.append(
             {
                 "rho_init": rho,
                 "sigma_init": group[0]["sigma_init"],
                 "advantage": float(advantage.mean()),
-                "sem_advantage": float(stats.sem(advantage)) if len(group) > 1 else float("nan"),
-                "individuals_sd": float(np.mean([r["individuals_sd"] for r in group])),
+                "sem_advantage": _sem(advantage),
+                "individuals_sd": float(diversity.mean()),
+                "sem_individuals_sd": _sem(diversity),
                 "sigma_trained": float(np.mean([r["sigma_trained"] for r in group])),
                 "mean_network_mean": float(np.mean([r["mean_network_mean"] for r in group])),
                 "n_seeds": len(group),
             }
         )
     return out
+
+
+def _sem(values: np.ndarray) -> float:
+    return float(stats.sem(values)) if values.size > 1 else float("nan")
 
 
 def run(profile: str, out_dir: Path, env: str = "ant") -> Path:

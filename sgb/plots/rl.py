@@ -109,7 +109,14 @@ def plot_spread(summary: list[dict], axes=None):
     axes[0].axhline(0.0, color=PALETTE["mean_network"], ls="--", label="mean network")
     axes[0].set_ylabel("individuals - mean network (return)")
     axes[0].legend(loc="best", fontsize=8)
-    axes[1].plot(sigma, [r["individuals_sd"] for r in summary], "o-", color=PALETTE["sgb"])
+    axes[1].errorbar(
+        sigma,
+        [r["individuals_sd"] for r in summary],
+        yerr=[r["sem_individuals_sd"] for r in summary],
+        marker="o",
+        capsize=3,
+        color=PALETTE["sgb"],
+    )
     axes[1].set_ylabel("SD of individuals' returns")
     for ax in axes:
         ax.set_xscale("log")
