@@ -122,6 +122,11 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     return write_results(Path(out_dir) / "rl" / f"fig3_{env}_{profile}.json", results, record)
 
 
+def seed_sem(values: np.ndarray) -> float:
+    """SEM over seeds of a 1-D array; NaN for a single seed."""
+    return float(stats.sem(values)) if values.size > 1 else float("nan")
+
+
 def summarize_sweep(runs: list[dict]) -> list[dict]:
     """Per cell-type count: mean final return, SEM over seeds, fraction of vanilla and its SEM.
 
@@ -131,7 +136,7 @@ def summarize_sweep(runs: list[dict]) -> list[dict]:
     out = []
     for k in dict.fromkeys(r["cell_types"] for r in runs):
         values = np.array([r["final_return"] for r in runs if r["cell_types"] == k])
-        spread = float(stats.sem(values)) if values.size > 1 else float("nan")
+        spread = seed_sem(values)
         out.append(
             {
                 "cell_types": k,

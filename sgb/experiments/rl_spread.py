@@ -14,13 +14,13 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from sgb import stats
 from sgb.experiments import check_profile
 from sgb.experiments.rl import (
     PopulationConfig,
     individuals_vs_mean,
     population_config,
     population_on,
+    seed_sem,
     sweep_config,
 )
 from sgb.layers import genome_tables
@@ -69,19 +69,15 @@ def summarize_spread(runs: list[dict]) -> list[dict]:
                 "rho_init": rho,
                 "sigma_init": group[0]["sigma_init"],
                 "advantage": float(advantage.mean()),
-                "sem_advantage": _sem(advantage),
+                "sem_advantage": seed_sem(advantage),
                 "individuals_sd": float(diversity.mean()),
-                "sem_individuals_sd": _sem(diversity),
+                "sem_individuals_sd": seed_sem(diversity),
                 "sigma_trained": float(np.mean([r["sigma_trained"] for r in group])),
                 "mean_network_mean": float(np.mean([r["mean_network_mean"] for r in group])),
                 "n_seeds": len(group),
             }
         )
     return out
-
-
-def _sem(values: np.ndarray) -> float:
-    return float(stats.sem(values)) if values.size > 1 else float("nan")
 
 
 def run(profile: str, out_dir: Path, env: str = "ant") -> Path:

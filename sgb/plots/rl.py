@@ -98,29 +98,18 @@ def plot_spread(summary: list[dict], axes=None):
     if axes is None:
         _, axes = subplots(1, 2, figsize=(10, 3.8))
     sigma = [r["sigma_init"] for r in summary]
-    axes[0].errorbar(
-        sigma,
-        [r["advantage"] for r in summary],
-        yerr=[r["sem_advantage"] for r in summary],
-        marker="o",
-        capsize=3,
-        color=PALETTE["individuals"],
+    panels = (
+        ("advantage", "individuals - mean network (return)", PALETTE["individuals"]),
+        ("individuals_sd", "SD of individuals' returns", PALETTE["sgb"]),
     )
-    axes[0].axhline(0.0, color=PALETTE["mean_network"], ls="--", label="mean network")
-    axes[0].set_ylabel("individuals - mean network (return)")
-    axes[0].legend(loc="best", fontsize=8)
-    axes[1].errorbar(
-        sigma,
-        [r["individuals_sd"] for r in summary],
-        yerr=[r["sem_individuals_sd"] for r in summary],
-        marker="o",
-        capsize=3,
-        color=PALETTE["sgb"],
-    )
-    axes[1].set_ylabel("SD of individuals' returns")
-    for ax in axes:
+    for ax, (key, label, color) in zip(axes, panels, strict=True):
+        values, errors = [r[key] for r in summary], [r[f"sem_{key}"] for r in summary]
+        ax.errorbar(sigma, values, yerr=errors, marker="o", capsize=3, color=color)
         ax.set_xscale("log")
         ax.set_xlabel("initial sigma of every type pair")
+        ax.set_ylabel(label)
+    axes[0].axhline(0.0, color=PALETTE["mean_network"], ls="--", label="mean network")
+    axes[0].legend(loc="best", fontsize=8)
     return axes
 
 
