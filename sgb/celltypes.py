@@ -9,12 +9,12 @@ from collections.abc import Sequence
 import jax.numpy as jnp
 import numpy as np
 
+from sgb import validation
+
 
 def _check_counts(n: int, k: int, n_name: str = "n", k_name: str = "k") -> None:
-    if int(n) != n or n <= 0:
-        raise ValueError(f"{n_name} must be a positive integer, got {n!r}")
-    if int(k) != k or k <= 0:
-        raise ValueError(f"{k_name} must be a positive integer, got {k!r}")
+    validation.integer(n_name, n)
+    validation.integer(k_name, k)
     if k > n:
         raise ValueError(f"{k_name}={k} cell types is more than the {n_name}={n} neurons")
 
@@ -40,7 +40,9 @@ def expand_table(table: jnp.ndarray, shape: Sequence[int]) -> jnp.ndarray:
     kernel table (k_h, k_w, k_cin, k_cout) -> (h, w, c_in, c_out)). Entry
     ``[a, b, ...]`` of the result is ``table[type(a), type(b), ...]``.
     """
-    shape = tuple(int(s) for s in shape)
+    if not hasattr(table, "ndim"):
+        raise TypeError(f"table must be an array, got {table!r}")
+    shape = validation.integers("shape", shape)
     if table.ndim != len(shape):
         raise ValueError(
             f"table has {table.ndim} axes but shape {shape} has {len(shape)}; they must match"

@@ -12,12 +12,12 @@ from typing import Any
 import jax
 import numpy as np
 
+from sgb import validation
+
 
 def _check_sizes(sizes: Sequence[int]) -> None:
-    if len(sizes) < 2:
+    if len(validation.integers("sizes", sizes)) < 2:
         raise ValueError(f"sizes needs at least an input and an output layer, got {sizes}")
-    if any(int(n) != n or n <= 0 for n in sizes):
-        raise ValueError(f"sizes must be positive integers, got {sizes}")
 
 
 def dense_param_count(sizes: Sequence[int]) -> int:
@@ -29,7 +29,7 @@ def dense_param_count(sizes: Sequence[int]) -> int:
 def sgb_param_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> int:
     """Means, rhos and biases of an SGB MLP; ``cell_types`` as in ``SGBMLP``."""
     _check_sizes(sizes)
-    if len(cell_types) != len(sizes):
+    if len(validation.integers("cell_types", cell_types, allow_none=True)) != len(sizes):
         raise ValueError(f"cell_types {cell_types} must have one entry per layer of {sizes}")
     types = [n if k is None else k for n, k in zip(sizes, cell_types, strict=True)]
     for n, k in zip(sizes, types, strict=True):
@@ -45,12 +45,9 @@ def tree_param_count(params: Any) -> int:
 
 def compression_ratio(uncompressed: int, compressed: int) -> float:
     """Uncompressed over compressed parameter count."""
-    if uncompressed <= 0 or compressed <= 0:
-        raise ValueError(
-            f"parameter counts must be positive, got uncompressed={uncompressed}, "
-            f"compressed={compressed}"
-        )
-    return uncompressed / compressed
+    return validation.integer("uncompressed", uncompressed) / validation.integer(
+        "compressed", compressed
+    )
 
 
 def hidden_types_sweep(
@@ -62,6 +59,7 @@ def hidden_types_sweep(
     """Compression ratio of an SGB MLP for each k in ``hidden_types`` (k types in every
     hidden layer, capped at the layer's width), inputs and outputs typed as given."""
     dense = dense_param_count(sizes)
+    validation.integers("hidden_types", hidden_types)
     ratios = []
     for k in hidden_types:
         types = [input_types, *(min(k, n) for n in sizes[1:-1]), output_types]

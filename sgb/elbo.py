@@ -15,6 +15,8 @@ import jax
 import jax.numpy as jnp
 import optax
 
+from sgb import validation
+
 
 def sown_kl(state: dict) -> jnp.ndarray:
     """Sum of every KL term the layers sowed into ``state["losses"]`` (nats)."""
@@ -47,8 +49,8 @@ def elbo_loss(
     ``local_reparam=True`` draws pre-activations instead of weights (see ``sgb.layers``);
     the model must accept that keyword.
     """
-    if num_samples < 1:
-        raise ValueError(f"num_samples must be >= 1, got {num_samples}")
+    validation.integer("num_samples", num_samples)
+    validation.non_negative("kl_weight", kl_weight)
 
     options = {"local_reparam": True} if local_reparam else {}
 

@@ -27,17 +27,34 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
+from sgb import validation
 from sgb.celltypes import assign_cell_types, block_counts, expand_table, type_sizes
-from sgb.priors import GaussianPrior, Prior
+from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
 
 KLCounting = Literal["synapse", "table"]
+KL_COUNTINGS = ("synapse", "table")
 
 
 def _check_types(name: str, types: int, neurons: int) -> None:
-    if types <= 0:
-        raise ValueError(f"{name} must be positive, got {types}")
     if types > neurons:
         raise ValueError(f"{name}={types} cell types is more than the {neurons} neurons")
+
+
+def _check_genome_settings(module: nn.Module) -> None:
+    """The genome fields every SGB layer and model shares: prior, KL counting, rho_init."""
+    validation.instance("prior", module.prior, PRIOR_TYPES)
+    validation.choice("kl_counting", module.kl_counting, KL_COUNTINGS)
+    validation.real("rho_init", module.rho_init)
+
+
+def _check_input(x: jnp.ndarray, expected: int | None) -> int:
+    """Width of the last axis of ``x``, checked against ``expected`` when it is given."""
+    if jnp.ndim(x) < 1:
+        raise ValueError(f"inputs need a feature axis, got an array of shape {jnp.shape(x)}")
+    width = x.shape[-1]
+    if expected is not None and width != expected:
+        raise ValueError(f"the layer is built for in_features={expected} inputs, got {width}")
+    return width
 
 
 def genome_kl(
@@ -54,6 +71,7 @@ def genome_kl(
     Bayes by backprop does); ``"table"`` counts each type pair once (the genome
     view: per pair, the mean of its synapses' Monte Carlo terms).
     """
+    validation.choice("counting", counting, KL_COUNTINGS)
     counts = jnp.asarray(block_counts(kernel.shape, mu.shape), dtype=kernel.dtype)
     if isinstance(prior, GaussianPrior):
         return _count_pairs(prior.kl(mu, sigma), counts, counting)
@@ -141,7 +159,9 @@ class SGBDense(nn.Module):
     """Dense layer (..., n_in) -> (..., features) with a (in_types, out_types) genome.
 
     ``in_types``/``out_types`` of ``None`` mean one type per neuron.
-    ``mean_init_std`` is in units of 1/sqrt(n_in).
+    ``mean_init_std`` is in units of 1/sqrt(n_in). ``in_features``, when given, is the
+    input width the layer is built for: a type table fits any width, so without it an
+    input of another width would run unnoticed.
     """
 
     features: int
@@ -151,14 +171,22 @@ class SGBDense(nn.Module):
     kl_counting: KLCounting = "synapse"
     mean_init_std: float = 1.0
     rho_init: float = -5.0
+    in_features: int | None = None
+
+    def __post_init__(self) -> None:
+        validation.integer("features", self.features)
+        for name in ("in_types", "out_types", "in_features"):
+            if getattr(self, name) is not None:
+                validation.integer(name, getattr(self, name))
+        validation.non_negative("mean_init_std", self.mean_init_std)
+        _check_genome_settings(self)
+        super().__post_init__()
 
     @nn.compact
     def __call__(
         self, x: jnp.ndarray, mean_network: bool = False, local_reparam: bool = False
     ) -> jnp.ndarray:
-        n_in = x.shape[-1]
-        if self.features <= 0:
-            raise ValueError(f"features must be positive, got {self.features}")
+        n_in = _check_input(x, self.in_features)
         k_in = n_in if self.in_types is None else self.in_types
         k_out = self.features if self.out_types is None else self.out_types
         _check_types("in_types", k_in, n_in)
@@ -197,12 +225,24 @@ class SGBConv(nn.Module):
     mean_init_std: float = 1.0
     rho_init: float = -5.0
 
+    def __post_init__(self) -> None:
+        validation.integer("features", self.features)
+        if len(validation.integers("kernel_size", self.kernel_size)) != 2:
+            raise ValueError(f"kernel_size must have 2 entries, got {self.kernel_size}")
+        if len(validation.integers("types", self.types)) != 4:
+            raise ValueError(f"types must have 4 entries (h, w, c_in, c_out), got {self.types}")
+        validation.integers("strides", self.strides)
+        validation.choice("padding", self.padding, ("SAME", "VALID"))
+        validation.non_negative("mean_init_std", self.mean_init_std)
+        _check_genome_settings(self)
+        super().__post_init__()
+
     @nn.compact
     def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
+        if jnp.ndim(x) != 4:
+            raise ValueError(f"inputs must be NHWC (4 axes), got shape {jnp.shape(x)}")
         shape = (*self.kernel_size, x.shape[-1], self.features)
         names = ("height types", "width types", "input-channel types", "output-channel types")
-        if len(self.types) != 4:
-            raise ValueError(f"types must have 4 entries (h, w, c_in, c_out), got {self.types}")
         for name, k, n in zip(names, self.types, shape, strict=True):
             _check_types(name, k, n)
         fan_in = shape[0] * shape[1] * shape[2]
@@ -228,6 +268,7 @@ class SGBMLP(nn.Module):
     ``widths``: output width of each layer, e.g. (800, 10).
     ``cell_types``: types of each neuron layer including the input, length
     len(widths) + 1, e.g. (30, 64, 10); ``None`` entries mean one type per neuron.
+    ``in_features``: the input width, checked on every call when given.
     """
 
     widths: Sequence[int]
@@ -235,16 +276,29 @@ class SGBMLP(nn.Module):
     prior: Prior = GaussianPrior(0.1)
     kl_counting: KLCounting = "synapse"
     rho_init: float = -5.0
+    in_features: int | None = None
+
+    def __post_init__(self) -> None:
+        widths = validation.integers("widths", self.widths)
+        types = validation.integers("cell_types", self.cell_types, allow_none=True)
+        if len(types) != len(widths) + 1:
+            raise ValueError(
+                f"cell_types needs {len(widths) + 1} entries (input and every layer), "
+                f"got {len(types)}"
+            )
+        for i, (k, n) in enumerate(zip(types[1:], widths, strict=True)):
+            if k is not None:
+                _check_types(f"cell_types[{i + 1}]", k, n)
+        if self.in_features is not None:
+            validation.integer("in_features", self.in_features)
+        _check_genome_settings(self)
+        super().__post_init__()
 
     @nn.compact
     def __call__(
         self, x: jnp.ndarray, mean_network: bool = False, local_reparam: bool = False
     ) -> jnp.ndarray:
-        if len(self.cell_types) != len(self.widths) + 1:
-            raise ValueError(
-                f"cell_types needs {len(self.widths) + 1} entries (input and every layer), "
-                f"got {len(self.cell_types)}"
-            )
+        _check_input(x, self.in_features)
         for i, width in enumerate(self.widths):
             x = SGBDense(
                 width,

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 from jax.scipy.special import logsumexp
 
+from sgb import validation
+
 _LOG_2PI = float(jnp.log(2.0 * jnp.pi))
 
 
@@ -20,11 +22,6 @@ def gaussian_log_prob(w: jnp.ndarray, mean: jnp.ndarray, sigma: jnp.ndarray) -> 
     return -0.5 * (_LOG_2PI + z**2) - jnp.log(sigma)
 
 
-def _check_sigma(name: str, value: float) -> None:
-    if not value > 0:
-        raise ValueError(f"{name} must be > 0, got {value!r}")
-
-
 @dataclass(frozen=True)
 class GaussianPrior:
     """p(w) = N(w | 0, sigma^2)."""
@@ -32,7 +29,7 @@ class GaussianPrior:
     sigma: float = 0.1
 
     def __post_init__(self) -> None:
-        _check_sigma("sigma", self.sigma)
+        validation.positive("sigma", self.sigma)
 
     def log_prob(self, w: jnp.ndarray) -> jnp.ndarray:
         return gaussian_log_prob(w, 0.0, self.sigma)
@@ -52,10 +49,9 @@ class ScaleMixturePrior:
     sigma2: float = float(jnp.exp(-6.0))
 
     def __post_init__(self) -> None:
-        if not 0.0 <= self.pi <= 1.0:
-            raise ValueError(f"pi must lie in [0, 1], got {self.pi!r}")
-        _check_sigma("sigma1", self.sigma1)
-        _check_sigma("sigma2", self.sigma2)
+        validation.in_range("pi", self.pi, 0.0, 1.0)
+        validation.positive("sigma1", self.sigma1)
+        validation.positive("sigma2", self.sigma2)
 
     def log_prob(self, w: jnp.ndarray) -> jnp.ndarray:
         parts = jnp.stack(
@@ -72,3 +68,4 @@ class ScaleMixturePrior:
 
 
 Prior = GaussianPrior | ScaleMixturePrior
+PRIOR_TYPES = (GaussianPrior, ScaleMixturePrior)

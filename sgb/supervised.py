@@ -27,13 +27,15 @@ import optax
 from flax.training.train_state import TrainState
 from tqdm.auto import tqdm
 
+from sgb import validation
 from sgb.compression import compression_ratio, dense_param_count, sgb_param_count
 from sgb.data import Dataset
 from sgb.dgb import Genome, dgb_param_count, make_fit
+from sgb.divergence import check_loss, check_params
 from sgb.elbo import cross_entropy
-from sgb.layers import SGBMLP, KLCounting
+from sgb.layers import KL_COUNTINGS, SGBMLP, KLCounting
 from sgb.population import apply_mean_network, apply_population, init_params
-from sgb.priors import GaussianPrior, Prior
+from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
 from sgb.stats import sem
 from sgb.training import fit_elbo
 
@@ -69,6 +71,24 @@ class ClassifierConfig:
     conv_features: tuple[int, ...] = ()
     local_reparam: bool = False
 
+    def __post_init__(self) -> None:
+        validation.integers("hidden", self.hidden)
+        types = validation.integers("cell_types", self.cell_types, allow_none=True)
+        if len(types) != len(self.hidden) + 2:
+            raise ValueError(
+                f"cell_types needs {len(self.hidden) + 2} entries (input, every hidden layer, "
+                f"output), got {len(types)}"
+            )
+        validation.instance("prior", self.prior, PRIOR_TYPES)
+        validation.choice("kl_counting", self.kl_counting, KL_COUNTINGS)
+        validation.non_negative("kl_scale", self.kl_scale)
+        validation.real("rho_init", self.rho_init)
+        _check_training(self)
+        validation.integer("num_samples", self.num_samples)
+        validation.integer("eval_individuals", self.eval_individuals)
+        if self.conv_features:
+            validation.integers("conv_features", self.conv_features)
+
 
 @dataclasses.dataclass(frozen=True)
 class DenseConfig:
@@ -91,6 +111,18 @@ class DenseConfig:
     gnet_learning_rate: float = 1e-2
     seed: int = 0
     conv_features: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        validation.integers("hidden", self.hidden)
+        if self.gnet_hidden is not None:
+            validation.integers("gnet_hidden", self.gnet_hidden)
+        _check_training(self)
+        validation.integer("rounds", self.rounds)
+        validation.integer("fit_steps", self.fit_steps)
+        validation.integer("fit_batch", self.fit_batch)
+        validation.positive("gnet_learning_rate", self.gnet_learning_rate)
+        if self.conv_features:
+            validation.integers("conv_features", self.conv_features)
 
 
 class ConvTrunk(nn.Module):
@@ -184,9 +216,12 @@ def make_model(config: ClassifierConfig, num_classes: int) -> nn.Module:
     )
 
 
-def _check_training(epochs: int, batch_size: int) -> None:
-    if epochs < 1 or batch_size < 1:
-        raise ValueError(f"epochs and batch_size must be >= 1, got {epochs}, {batch_size}")
+def _check_training(config: "ClassifierConfig | DenseConfig") -> None:
+    """The optimisation settings both configs share."""
+    validation.positive("learning_rate", config.learning_rate)
+    validation.integer("batch_size", config.batch_size)
+    validation.integer("epochs", config.epochs)
+    validation.integer("seed", config.seed, minimum=0)
 
 
 def _minibatches(n: int, batch_size: int, epochs: int, seed: int) -> Iterator[tuple[int, Any]]:
@@ -213,6 +248,7 @@ def _train_loop(state, step, data: Dataset, config, key, progress: bool, desc: s
     for t, (epoch, idx) in enumerate(batches, start=1):
         key, step_key = jax.random.split(key)
         state, metrics = step(state, data.x_train[idx], data.y_train[idx], step_key)
+        check_loss(float(metrics["loss"]), t)
         if hook is not None:
             state = hook(state, t)
         for name, value in metrics.items():
@@ -222,6 +258,7 @@ def _train_loop(state, step, data: Dataset, config, key, progress: bool, desc: s
             history.append({"epoch": epoch + 1, **{k: v / n_batches for k, v in sums.items()}})
             sums = {}
     bar.close()
+    check_params(state.params, t)
     return state, history
 
 
@@ -230,7 +267,6 @@ def train_classifier(
 ) -> tuple[nn.Module, Any, list[dict[str, float]]]:
     """Train an SGB classifier with Adam on the negative ELBO; returns (model, params,
     per-epoch history of loss, data term and KL)."""
-    _check_training(config.epochs, config.batch_size)
     model = make_model(config, data.num_classes)
     params = init_params(model, jax.random.key(config.seed), data.x_train[:1])
     params, history = fit_elbo(
@@ -275,7 +311,6 @@ def train_dense(
     the g-nets' last fit error ``fit_mse`` (mean squared error of kernels
     times sqrt(fan-in)), and ``params["genome"]`` the g-nets' parameters.
     """
-    _check_training(config.epochs, config.batch_size)
     model = DenseClassifier((*config.hidden, data.num_classes), config.conv_features)
     init_key, gnet_key, key = jax.random.split(jax.random.key(config.seed), 3)
     params = model.init(init_key, data.x_train[:1])
@@ -287,8 +322,6 @@ def train_dense(
         state, history = _train_loop(state, step, data, config, key, progress, "dense training")
         return model, state.params, history
 
-    if config.rounds < 1:
-        raise ValueError(f"rounds must be >= 1, got {config.rounds}")
     sizes = dense_sizes(
         data.x_train.shape[1:], config.conv_features, config.hidden, data.num_classes
     )
@@ -437,6 +470,20 @@ class SweepConfig:
     models: tuple[str, ...] = MODEL_KINDS
     sgb: ClassifierConfig = ClassifierConfig()
     dgb: DenseConfig = DenseConfig()
+
+    def __post_init__(self) -> None:
+        if not self.ratios:
+            raise ValueError("ratios must not be empty")
+        for i, ratio in enumerate(self.ratios):
+            validation.positive(f"ratios[{i}]", ratio)
+        validation.integers("seeds", self.seeds, minimum=0)
+        validation.integers("hidden", self.hidden)
+        validation.integer("in_types", self.in_types)
+        validation.integer("out_types", self.out_types)
+        for i, kind in enumerate(self.models):
+            validation.choice(f"models[{i}]", kind, MODEL_KINDS)
+        validation.instance("sgb", self.sgb, ClassifierConfig)
+        validation.instance("dgb", self.dgb, DenseConfig)
 
 
 def _sweep_jobs(sweep: SweepConfig, sizes: tuple[int, ...]) -> list[tuple[str, int, int]]:

@@ -11,6 +11,8 @@ import optax
 from flax.training.train_state import TrainState
 from tqdm.auto import tqdm
 
+from sgb import validation
+from sgb.divergence import check_loss, check_params
 from sgb.elbo import elbo_loss
 
 DataLoss = Callable[[jnp.ndarray, jnp.ndarray], jnp.ndarray]
@@ -36,10 +38,14 @@ def fit_elbo(
 
     Returns the trained params and one dict per epoch with the mean ``loss``,
     ``data`` and ``kl`` terms over its minibatches. ``local_reparam`` selects the
-    gradient estimator of ``sgb.elbo.elbo_loss``.
+    gradient estimator of ``sgb.elbo.elbo_loss``. Raises ``sgb.divergence.TrainingDiverged``
+    at the first step whose loss is not finite.
     """
-    if epochs < 1 or batch_size < 1:
-        raise ValueError(f"epochs and batch_size must be >= 1, got {epochs}, {batch_size}")
+    validation.integer("epochs", epochs)
+    validation.integer("batch_size", batch_size)
+    validation.integer("num_samples", num_samples)
+    validation.positive("learning_rate", learning_rate)
+    validation.non_negative("kl_weight", kl_weight)
     state = TrainState.create(apply_fn=model.apply, params=params, tx=optax.adam(learning_rate))
 
     @jax.jit
@@ -71,7 +77,9 @@ def fit_elbo(
             idx = order[b * batch_size : (b + 1) * batch_size]
             key, step_key = jax.random.split(key)
             state, metrics = train_step(state, x[idx], y[idx], step_key)
+            check_loss(float(metrics["loss"]), epoch * n_batches + b + 1)
             for name, value in metrics.items():
                 sums[name] = sums.get(name, 0.0) + float(value)
         history.append({"epoch": epoch + 1, **{k: v / n_batches for k, v in sums.items()}})
+    check_params(state.params, epochs * n_batches)
     return state.params, history

@@ -46,6 +46,6 @@ def test_training_is_reproducible_from_its_seed():
 
 
 def test_bad_training_arguments_raise():
-    config = dataclasses.replace(classifier_variants(PROFILES["smoke"])["BNN (k = n)"], epochs=0)
+    config = classifier_variants(PROFILES["smoke"])["BNN (k = n)"]
     with pytest.raises(ValueError, match="epochs"):
-        train_and_evaluate(config, digits(seed=0), progress=False)
+        dataclasses.replace(config, epochs=0)

@@ -132,18 +132,18 @@ def test_conv_layer_kernel_follows_its_four_d_genome():
 
 
 @pytest.mark.parametrize(
-    ("layer", "shape", "match"),
+    ("make", "shape", "match"),
     [
-        (SGBDense(4, in_types=6), (1, 5), "in_types"),
-        (SGBDense(4, out_types=5), (1, 5), "out_types"),
-        (SGBDense(4, out_types=0), (1, 5), "out_types"),
-        (SGBMLP(widths=(4, 2), cell_types=(1, 1)), (1, 5), "cell_types"),
-        (SGBConv(4, (3, 3), types=(4, 1, 1, 1)), (1, 5, 5, 2), "height types"),
+        (lambda: SGBDense(4, in_types=6), (1, 5), "in_types"),
+        (lambda: SGBDense(4, out_types=5), (1, 5), "out_types"),
+        (lambda: SGBDense(4, out_types=0), (1, 5), "out_types"),
+        (lambda: SGBMLP(widths=(4, 2), cell_types=(1, 1)), (1, 5), "cell_types"),
+        (lambda: SGBConv(4, (3, 3), types=(4, 1, 1, 1)), (1, 5, 5, 2), "height types"),
     ],
 )
-def test_bad_layer_arguments_raise_clear_errors(layer, shape, match):
+def test_bad_layer_arguments_raise_clear_errors(make, shape, match):
     with pytest.raises(ValueError, match=match):
-        _init(layer, jnp.ones(shape))
+        _init(make(), jnp.ones(shape))
 
 
 def test_elbo_rejects_zero_samples():

@@ -36,6 +36,8 @@ import numpy as np
 from brax.io import mjcf
 from etils import epath
 
+from sgb import validation
+
 VARIANTS = ("normal", "long_legs", "slippery", "low_gravity")
 LEG_SCALE = 1.2
 FRICTION_SCALE = 0.25
@@ -52,6 +54,8 @@ class EnvSpec:
     variant: str = "normal"
 
     def __post_init__(self) -> None:
+        validation.instance("name", self.name, str)
+        validation.instance("backend", self.backend, str)
         if self.variant not in VARIANTS:
             raise ValueError(f"variant must be one of {VARIANTS}, got {self.variant!r}")
         if self.variant != "normal" and self.name != "ant":

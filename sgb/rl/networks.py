@@ -19,6 +19,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sgb import validation
 from sgb.celltypes import assign_cell_types
 from sgb.layers import SGBDense
 from sgb.priors import GaussianPrior, Prior, ScaleMixturePrior
@@ -43,9 +44,11 @@ class NetworkConfig:
     rho_init: float = -5.0
 
     def __post_init__(self) -> None:
-        if not self.hidden or any(w <= 0 for w in self.hidden):
-            raise ValueError(f"hidden must be positive widths, got {self.hidden}")
-        if self.cell_types is not None and not 0 < self.cell_types <= min(self.hidden):
+        validation.integers("hidden", self.hidden)
+        validation.real("rho_init", self.rho_init)
+        if self.cell_types is not None and not (
+            0 < validation.integer("cell_types", self.cell_types) <= min(self.hidden)
+        ):
             raise ValueError(
                 f"cell_types must lie in [1, {min(self.hidden)}], got {self.cell_types}"
             )

@@ -37,6 +37,8 @@ import numpy as np
 import optax
 from tqdm.auto import tqdm
 
+from sgb import validation
+from sgb.divergence import check_loss, check_params
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
     MLP,
@@ -75,6 +77,8 @@ class PPOConfig:
     eval_individuals: int = 32
 
     def __post_init__(self) -> None:
+        validation.instance("env", self.env, EnvSpec)
+        validation.instance("network", self.network, NetworkConfig)
         for name in (
             "total_steps",
             "num_envs",
@@ -85,8 +89,14 @@ class PPOConfig:
             "num_evals",
             "eval_individuals",
         ):
-            if getattr(self, name) < 1:
-                raise ValueError(f"{name} must be positive, got {getattr(self, name)}")
+            validation.integer(name, getattr(self, name))
+        validation.positive("learning_rate", self.learning_rate)
+        validation.positive("clip", self.clip)
+        validation.in_range("discount", self.discount, 0.0, 1.0, low_open=True)
+        validation.in_range("gae_lambda", self.gae_lambda, 0.0, 1.0)
+        validation.positive("reward_scaling", self.reward_scaling)
+        for name in ("value_coef", "entropy_coef", "kl_coef"):
+            validation.non_negative(name, getattr(self, name))
         if self.num_envs % self.num_minibatches:
             raise ValueError(
                 f"num_envs={self.num_envs} must be a multiple of num_minibatches="
@@ -213,7 +223,8 @@ def _loss(params: Params, data: Unroll, normalizer: Normalizer, config: PPOConfi
         - config.entropy_coef * entropy
         + config.kl_coef * kl
     )
-    return total, {"policy": policy_loss, "value": value_loss, "entropy": entropy, "kl": kl}
+    metrics = {"total": total, "policy": policy_loss, "value": value_loss, "entropy": entropy}
+    return total, {**metrics, "kl": kl}
 
 
 def _optimizer(config: PPOConfig) -> optax.GradientTransformation:
@@ -313,7 +324,8 @@ def _sgd(ts: TrainState, data: Unroll, config: PPOConfig):
 
 @partial(jax.jit, static_argnames=("config", "n"))
 def train_iterations(ts: TrainState, config: PPOConfig, n: int):
-    """``n`` PPO iterations (unroll, normaliser update, SGD) in one jitted call."""
+    """``n`` PPO iterations (unroll, normaliser update, SGD) in one jitted call; the
+    metrics of every iteration, shape (n,) each."""
 
     def body(ts, _):
         ts, data = _unroll(ts, config)
@@ -324,7 +336,16 @@ def train_iterations(ts: TrainState, config: PPOConfig, n: int):
     # Brax's step returns a few weakly typed leaves; strong types keep the next call's
     # signature equal to this one's, so it does not compile again.
     ts = ts._replace(env_state=jax.tree_util.tree_map(_strong, ts.env_state))
-    return ts, jax.tree_util.tree_map(lambda m: m[-1], metrics)
+    return ts, metrics
+
+
+def _check_divergence(metrics: dict, params: Params, done: int, config: PPOConfig) -> None:
+    """Raise ``TrainingDiverged`` naming the first iteration (after ``done`` earlier ones)
+    whose loss is not finite, or the first non-finite parameter."""
+    losses = np.asarray(metrics["total"])
+    for i, loss in enumerate(losses):
+        check_loss(float(loss), (done + i + 1) * config.steps_per_iteration, "PPO loss")
+    check_params(params, (done + len(losses)) * config.steps_per_iteration)
 
 
 def _strong(x: jnp.ndarray) -> jnp.ndarray:
@@ -363,8 +384,8 @@ def train(config: PPOConfig, seed: int = 0, progress: bool = True) -> TrainResul
     timed_steps, timed_s = 0, 0.0
     for i in tqdm(range(config.num_evals), desc="PPO", disable=not progress):
         t0 = time.perf_counter()
-        ts, _ = train_iterations(ts, config, chunk)
-        jax.block_until_ready(ts.params)
+        ts, metrics = train_iterations(ts, config, chunk)
+        _check_divergence(metrics, ts.params, i * chunk, config)
         if i > 0 or config.num_evals == 1:
             timed_s += time.perf_counter() - t0
             timed_steps += chunk * config.steps_per_iteration
