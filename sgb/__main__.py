@@ -6,6 +6,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from sgb.divergence import TrainingDiverged
 from sgb.experiments import EXPERIMENTS, PROFILE_NAMES, get_experiment
 
 
@@ -28,9 +29,12 @@ def main(argv: list[str] | None = None) -> int:
         run = get_experiment(args.experiment).run
         _check_options(args.experiment, run, options)
         path = run(args.profile, args.out_dir, **options)
-    except ValueError as error:
+    except (ValueError, TypeError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
+    except (OSError, TrainingDiverged) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
     print(f"wrote {path}")
     return 0
 

@@ -4,8 +4,11 @@ import dataclasses
 import datetime
 import importlib.metadata
 import json
+import math
+import os
 import platform
 import subprocess
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -46,7 +49,11 @@ def git_commit() -> str:
     return commit + ("+dirty" if dirty else "")
 
 
+NULL_MEANS = "null stands for a value that is not a finite number (e.g. an SEM of one seed)"
+
+
 def _jsonable(value: Any) -> Any:
+    """``value`` as strict JSON data: nan and inf become ``None`` (``null``)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {"type": type(value).__name__, **_jsonable(dataclasses.asdict(value))}
     if isinstance(value, dict):
@@ -54,8 +61,42 @@ def _jsonable(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [_jsonable(v) for v in value]
     if hasattr(value, "tolist"):
-        return value.tolist()
+        return _jsonable(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
     return value
+
+
+def results_file(out_dir: str | Path, stem: str, profile: str) -> Path:
+    """``out_dir/{stem}_{profile}.json``, the one naming of results files, so that no profile
+    ever writes over another's. Checks that ``out_dir`` is (or can be made) a writable
+    directory, so a bad location fails before an experiment starts, not after it."""
+    out_dir = Path(out_dir)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out_dir):
+            pass
+    except OSError as error:
+        raise ValueError(f"cannot write results under {out_dir}: {error}") from error
+    return out_dir / f"{stem}_{profile}.json"
+
+
+def atomic_write(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` through a temporary file in the same directory and
+    ``os.replace``: a failed write leaves the old file untouched."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as handle:
+            handle.write(data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
 
 
 def provenance(config: Any, profile: str, seeds: list[int], wall_time_s: float) -> dict[str, Any]:
@@ -71,16 +112,16 @@ def provenance(config: Any, profile: str, seeds: list[int], wall_time_s: float) 
         "backend": jax.default_backend(),
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "wall_time_s": round(float(wall_time_s), 2),
+        "null": NULL_MEANS,
     }
 
 
 def write_results(path: str | Path, results: dict[str, Any], record: dict[str, Any]) -> Path:
-    """Write ``{"provenance": record, "results": results}`` as JSON; returns the path."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    payload = {"provenance": record, "results": _jsonable(results)}
-    path.write_text(json.dumps(payload, indent=1, sort_keys=False) + "\n")
-    return path
+    """Write ``{"provenance": record, "results": results}`` as strict JSON (non-finite
+    numbers as ``null``), atomically; returns the path."""
+    payload = {"provenance": _jsonable(record), "results": _jsonable(results)}
+    text = json.dumps(payload, indent=1, sort_keys=False, allow_nan=False) + "\n"
+    return atomic_write(path, text.encode())
 
 
 def read_results(path: str | Path) -> dict[str, Any]:

@@ -14,7 +14,7 @@ from sgb.experiments import check_profile
 from sgb.layers import SGBMLP, genome_tables
 from sgb.population import init_params
 from sgb.priors import GaussianPrior
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance, results_file, write_results
 from sgb.regression import gaussian_nll, predictive_bands, toy_regression_data
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 from sgb.training import fit_elbo
@@ -139,8 +139,9 @@ def compare_classifiers(config: BBBConfig, progress: bool = True) -> dict[str, A
 
 
 def run(profile: str, out_dir: Path) -> Path:
-    """Run chapter 2's experiments at ``profile``; write ``bbb.json`` under ``out_dir``."""
+    """Run chapter 2's experiments at ``profile``; write ``out_dir/bbb_<profile>.json``."""
     config = PROFILES[check_profile(profile)]
+    path = results_file(out_dir, "bbb", profile)
     start = time.perf_counter()
     regression = fit_regression(config, progress=False)
     classifiers = compare_classifiers(config, progress=False)
@@ -149,4 +150,4 @@ def run(profile: str, out_dir: Path) -> Path:
         "classifiers": classifiers["rows"],
     }
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(Path(out_dir) / "bbb.json", results, record)
+    return write_results(path, results, record)

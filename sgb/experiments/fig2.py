@@ -19,7 +19,7 @@ from typing import Any
 from sgb.data import load
 from sgb.experiments import check_profile
 from sgb.priors import GaussianPrior
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance, results_file, write_results
 from sgb.supervised import (
     ClassifierConfig,
     DenseConfig,
@@ -104,12 +104,6 @@ PROFILES: dict[str, dict[str, tuple[SweepConfig, SweepConfig | None]]] = {
 }
 
 
-def results_path(out_dir: Path, dataset: str, profile: str) -> Path:
-    """Where ``run`` writes: ``fig2_<dataset>.json``, with ``_smoke`` for the smoke profile."""
-    suffix = "_smoke" if profile == "smoke" else ""
-    return Path(out_dir) / f"fig2_{dataset}{suffix}.json"
-
-
 def sweep_results(
     dataset: str, sweep: SweepConfig, ablation: SweepConfig | None, progress: bool = True
 ) -> dict[str, Any]:
@@ -141,6 +135,7 @@ def run(profile: str, out_dir: Path, dataset: str = "digits", progress: bool = T
             f"{sorted(PROFILES[profile])}"
         )
     sweep, ablation = PROFILES[profile][dataset]
+    path = results_file(out_dir, f"fig2_{dataset}", profile)
     start = time.perf_counter()
     results = sweep_results(dataset, sweep, ablation, progress)
     record = provenance(
@@ -149,4 +144,4 @@ def run(profile: str, out_dir: Path, dataset: str = "digits", progress: bool = T
         list(sweep.seeds),
         time.perf_counter() - start,
     )
-    return write_results(results_path(out_dir, dataset, profile), results, record)
+    return write_results(path, results, record)

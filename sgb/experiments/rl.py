@@ -19,7 +19,7 @@ import numpy as np
 
 from sgb import stats
 from sgb.experiments import check_profile
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance, results_file, write_results
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import NetworkConfig
@@ -98,14 +98,15 @@ def checkpoint_name(env: str, cell_types: int | None, seed: int, profile: str) -
 def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     """Train the sweep; write per-run returns, fractions of vanilla and checkpoints."""
     config = sweep_config(env, profile)
+    path = results_file(Path(out_dir) / "rl", f"fig3_{env}", profile)
     start = time.perf_counter()
     runs = []
     for k in config.cell_types:
         ppo = replace(config.ppo, network=NetworkConfig(cell_types=k))
         for seed in config.seeds:
             result = train(ppo, seed=seed)
-            path = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile)
-            checkpoints.save(path, result, {"profile": profile, "seed": seed})
+            checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile)
+            checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
             runs.append(
                 {
                     "cell_types": k,
@@ -114,12 +115,12 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
                     "eval_steps": result.eval_steps,
                     "eval_returns": result.eval_returns,
                     "train_steps_per_s": result.train_steps_per_s,
-                    "checkpoint": path.name,
+                    "checkpoint": checkpoint.name,
                 }
             )
     results = {"env": env, "runs": runs, "summary": summarize_sweep(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(Path(out_dir) / "rl" / f"fig3_{env}_{profile}.json", results, record)
+    return write_results(path, results, record)
 
 
 def seed_sem(values: np.ndarray) -> float:
@@ -220,6 +221,7 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
             f"env must be 'ant' for {figure} (the variants are Ant bodies), got {env!r}"
         )
     config = population_config(profile)
+    path = results_file(Path(out_dir) / "rl", f"{figure}_{env}", profile)
     start = time.perf_counter()
     if figure == "fig5":
         config = replace(config, conditions=("normal",))
@@ -233,7 +235,7 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     else:
         results["mean_network"] = individuals_vs_mean(returns)
     record = provenance(config, profile, [config.seed], time.perf_counter() - start)
-    return write_results(Path(out_dir) / "rl" / f"{figure}_{env}_{profile}.json", results, record)
+    return write_results(path, results, record)
 
 
 def _results_root(out_dir: Path, config: PopulationConfig) -> Path:

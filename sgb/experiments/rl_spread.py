@@ -24,7 +24,7 @@ from sgb.experiments.rl import (
     sweep_config,
 )
 from sgb.layers import genome_tables
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance, results_file, write_results
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.ppo import PPOConfig, train
 
@@ -85,6 +85,7 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
     if env != "ant":
         raise ValueError(f"env must be 'ant' for spread, got {env!r}")
     config = spread_config(profile)
+    path = results_file(Path(out_dir) / "rl", f"spread_{env}", profile)
     start = time.perf_counter()
     runs = []
     for rho in config.rho_inits:
@@ -107,7 +108,7 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
             )
     results = {"env": env, "runs": runs, "summary": summarize_spread(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(Path(out_dir) / "rl" / f"spread_{env}_{profile}.json", results, record)
+    return write_results(path, results, record)
 
 
 PROFILES = {p: spread_config(p) for p in ("smoke", "cpu", "paper")}

@@ -1,7 +1,7 @@
 """Chapter 3: the Jensen gap on 1-D toy losses and on a trained SGB digits classifier.
 
 ``compute(config)`` returns every number the chapter shows; ``run`` writes them
-to ``results/theory.json`` with provenance.
+to ``results/theory_cpu.json`` with provenance.
 """
 
 import dataclasses
@@ -18,7 +18,7 @@ from tqdm.auto import tqdm
 from sgb import theory
 from sgb.data import digits
 from sgb.experiments import check_profile
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance, results_file, write_results
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 
 
@@ -269,15 +269,16 @@ def compute(config: TheoryConfig, progress: bool = True) -> dict[str, Any]:
 
 
 def run(profile: str, out_dir: Path, **options: Any) -> Path:
-    """Compute chapter 3's numbers at ``profile`` and write ``out_dir/theory.json``."""
+    """Compute chapter 3's numbers at ``profile`` and write ``out_dir/theory_<profile>.json``."""
     check_profile(profile)
     if options:
         raise ValueError(f"theory takes no options, got {sorted(options)}")
     config = PROFILES[profile]
+    path = results_file(out_dir, "theory", profile)
     start = time.time()
     results = compute(config)
     record = provenance(config, profile, [config.seed], time.time() - start)
-    return write_results(Path(out_dir) / "theory.json", results, record)
+    return write_results(path, results, record)
 
 
 def network_summary(results: dict[str, Any]) -> tuple[list[dict], list[dict]]:

@@ -2,9 +2,12 @@
 
 ``save(path, result)`` writes ``path`` (msgpack: actor and critic parameters,
 observation statistics) and ``path.with_suffix(".json")`` (the PPO config,
-the learning curve and the provenance passed in).
+the learning curve, the provenance passed in and the SHA-256 of the msgpack file),
+each atomically. ``load`` checks the checksum and that the parameter shapes are those
+the config describes, and names the file in every error.
 """
 
+import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -13,10 +16,11 @@ import jax
 import numpy as np
 from flax import serialization
 
+from sgb.provenance import atomic_write
 from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.normalizer import Normalizer
-from sgb.rl.ppo import Params, PPOConfig, TrainResult
+from sgb.rl.ppo import Params, PPOConfig, TrainResult, init_params
 
 
 def _config_dict(config: PPOConfig) -> dict[str, Any]:
@@ -44,7 +48,7 @@ def save(path: str | Path, result: TrainResult, record: dict[str, Any] | None = 
         "normalizer": result.normalizer._asdict(),
     }
     state = jax.tree_util.tree_map(lambda x: np.asarray(x, dtype=np.float32), state)
-    path.write_bytes(serialization.msgpack_serialize(state))
+    data = serialization.msgpack_serialize(state)
     meta = {
         "config": _config_dict(result.config),
         "eval_steps": result.eval_steps,
@@ -52,18 +56,50 @@ def save(path: str | Path, result: TrainResult, record: dict[str, Any] | None = 
         "train_steps_per_s": result.train_steps_per_s,
         "wall_time_s": result.wall_time_s,
         "provenance": record or {},
+        "sha256": hashlib.sha256(data).hexdigest(),
     }
-    path.with_suffix(".json").write_text(json.dumps(meta, indent=1) + "\n")
+    atomic_write(path, data)
+    atomic_write(path.with_suffix(".json"), (json.dumps(meta, indent=1) + "\n").encode())
     return path
 
 
 def load(path: str | Path) -> tuple[PPOConfig, Params, Normalizer, dict[str, Any]]:
     """Read a checkpoint: its config, parameters, observation statistics and metadata."""
     path = Path(path)
-    if not path.exists():
-        raise ValueError(f"path {path} does not exist")
-    state = serialization.msgpack_restore(path.read_bytes())
-    meta = json.loads(path.with_suffix(".json").read_text())
-    state = jax.tree_util.tree_map(jax.numpy.asarray, state)
-    params = Params(state["actor"], state["critic"])
-    return config_from_dict(meta["config"]), params, Normalizer(**state["normalizer"]), meta
+    sidecar = path.with_suffix(".json")
+    for file in (path, sidecar):
+        if not file.exists():
+            raise ValueError(f"checkpoint file {file} does not exist")
+    data = path.read_bytes()
+    try:
+        meta = json.loads(sidecar.read_text())
+        expected, config = meta["sha256"], config_from_dict(meta["config"])
+    except (ValueError, KeyError, TypeError) as error:
+        raise ValueError(f"checkpoint sidecar {sidecar} is unreadable: {error!r}") from error
+    if hashlib.sha256(data).hexdigest() != expected:
+        raise ValueError(f"checkpoint {path} does not match the SHA-256 recorded in {sidecar}")
+    try:
+        state = serialization.msgpack_restore(data)
+        params = Params(state["actor"], state["critic"])
+        normalizer = Normalizer(**state["normalizer"])
+    except (ValueError, KeyError, TypeError) as error:
+        raise ValueError(f"checkpoint {path} is unreadable: {error!r}") from error
+    _check_shapes(path, params, init_params(config, seed=0))
+    params, normalizer = jax.tree_util.tree_map(jax.numpy.asarray, (params, normalizer))
+    return config, params, normalizer, meta
+
+
+def _check_shapes(path: Path, params: Params, expected: Params) -> None:
+    """Raise ``ValueError`` naming ``path`` unless ``params`` has the shapes of ``expected``."""
+
+    def shapes(tree: Any) -> dict[str, tuple[int, ...]]:
+        leaves = jax.tree_util.tree_leaves_with_path(tree)
+        return {jax.tree_util.keystr(k): tuple(np.shape(v)) for k, v in leaves}
+
+    got, want = shapes(params), shapes(expected)
+    if got != want:
+        diff = sorted(set(got.items()) ^ set(want.items()))[:4]
+        raise ValueError(
+            f"checkpoint {path} does not hold the parameters its sidecar's config describes "
+            f"(first differences, (name, shape): {diff})"
+        )

@@ -231,16 +231,27 @@ def _optimizer(config: PPOConfig) -> optax.GradientTransformation:
     return optax.adam(config.learning_rate)
 
 
+def _init_params(config: PPOConfig, key_actor: jax.Array, key_critic: jax.Array) -> Params:
+    env, actor, critic = _models(config)
+    dummy = jnp.zeros((1, env.observation_size))
+    return Params(
+        {"params": actor.init({"params": key_actor, "sample": key_actor}, dummy)["params"]},
+        {"params": critic.init({"params": key_critic, "sample": key_critic}, dummy)["params"]},
+    )
+
+
+def init_params(config: PPOConfig, seed: int) -> Params:
+    """Initial actor and critic parameters for ``seed``, as ``init_state`` makes them."""
+    _, ka, kc, _, _ = jax.random.split(jax.random.PRNGKey(seed), 5)
+    return _init_params(config, ka, kc)
+
+
 def init_state(config: PPOConfig, seed: int) -> TrainState:
     """Initial parameters, optimizer, environments and individuals for ``seed``."""
-    env, actor, critic = _models(config)
+    env, _, _ = _models(config)
     key = jax.random.PRNGKey(seed)
     key, ka, kc, kr, ki = jax.random.split(key, 5)
-    dummy = jnp.zeros((1, env.observation_size))
-    params = Params(
-        {"params": actor.init({"params": ka, "sample": ka}, dummy)["params"]},
-        {"params": critic.init({"params": kc, "sample": kc}, dummy)["params"]},
-    )
+    params = _init_params(config, ka, kc)
     env_state = jax.jit(jax.vmap(env.reset))(jax.random.split(kr, config.num_envs))
     # strong types, as the training step returns them (weak types would force a recompile)
     env_state = jax.tree_util.tree_map(_strong, env_state)
