@@ -1,5 +1,7 @@
 """PPO and populations on a cheap environment: learning, individuals, checkpoints, GAE."""
 
+import json
+
 import brax.envs
 import jax
 import jax.numpy as jnp
@@ -7,6 +9,7 @@ import numpy as np
 import pytest
 from brax.envs.base import Env, State
 
+from sgb.divergence import TrainingDiverged
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import (
@@ -168,7 +171,7 @@ def test_normalizer_matches_numpy():
     np.testing.assert_allclose(norm.m2 / (norm.count - 1), seen.var(0, ddof=1), rtol=1e-4)
 
 
-def test_checkpoint_round_trip(tmp_path):
+def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
     config = _config(4, total_steps=1024, num_evals=1)
     result = train(config, seed=0, progress=False)
     path = checkpoints.save(tmp_path / "agent.msgpack", result, {"note": "test"})
@@ -178,6 +181,29 @@ def test_checkpoint_round_trip(tmp_path):
     before = population_returns(*args, result.params.actor, result.normalizer, 4, 1, EPISODE)
     after = population_returns(*args, params.actor, norm, 4, 1, EPISODE)
     np.testing.assert_allclose(before, after, rtol=1e-6)
+
+    good, sidecar = path.read_bytes(), path.with_suffix(".json")
+    flipped = bytearray(good)
+    flipped[len(good) // 2] ^= 0x01
+    path.write_bytes(bytes(flipped))
+    with pytest.raises(ValueError, match=f"{path}.*SHA-256"):
+        checkpoints.load(path)
+    path.write_bytes(good[: len(good) // 2])
+    with pytest.raises(ValueError, match=f"{path}.*SHA-256"):
+        checkpoints.load(path)
+    path.write_bytes(good)
+    meta = json.loads(sidecar.read_text())
+    meta["config"]["network"]["cell_types"] = 8  # the parameters hold 4 types
+    sidecar.write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match=f"{path} does not hold the parameters"):
+        checkpoints.load(path)
+
+
+@pytest.mark.parametrize("cell_types", [None, 4])
+def test_ppo_stops_when_training_diverges(cell_types):
+    config = _config(cell_types, learning_rate=1e30, total_steps=2048, num_evals=1)
+    with pytest.raises(TrainingDiverged, match=r"at step \d+"):
+        train(config, seed=0, progress=False)
 
 
 def test_bad_arguments_raise():
