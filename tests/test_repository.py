@@ -1,7 +1,11 @@
 """Checks of the repository itself: pins, notebooks as committed, the Colab install cell."""
 
+import importlib.util
 import json
+import os
 import re
+import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -14,7 +18,9 @@ NOTEBOOKS = sorted(
     for p in (ROOT / "book").rglob("*.ipynb")
     if ".ipynb_checkpoints" not in p.parts
 )
-INSTALL_URL = "https://github.com/sgb-companion/sgb-book"
+_spec = importlib.util.spec_from_file_location("install_cell", ROOT / "tools" / "install_cell.py")
+install_cell = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(install_cell)
 PIN = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==(\S+)$")
 
 
@@ -65,27 +71,64 @@ def test_notebook_is_committed_without_outputs(notebook):
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS)
-def test_notebook_starts_with_the_guarded_install_cell(notebook):
-    version = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+def test_notebook_starts_with_the_install_cell_of_the_configured_ref(notebook):
     code_cells = [c for c in _load(notebook)["cells"] if c["cell_type"] == "code"]
     assert code_cells, f"{notebook} has no code cell"
     first = code_cells[0]
-    source = _source(first)
     assert "remove-cell" in first.get("metadata", {}).get("tags", []), (
         f"{notebook}: the install cell must be tagged remove-cell"
     )
-    assert re.search(r'^if "google\.colab" in sys\.modules:', source, re.MULTILINE), (
-        f"{notebook}: the install must be guarded to run on Colab only"
+    assert _source(first) == install_cell.cell_source(), (
+        f"{notebook}: install cell differs from _config.yml's; run python tools/install_cell.py"
     )
-    match = re.search(
-        r'^\s+%pip install -q "sgb @ git\+' + re.escape(INSTALL_URL) + r'@(\S+)"\s*$',
-        source,
-        re.MULTILINE,
+
+
+def test_install_cell_installs_the_launch_buttons_ref_with_the_pins():
+    url, ref = install_cell.repository()
+    source = install_cell.cell_source()
+    assert f'REF = "{ref}"' in source
+    assert f"sgb-companion @ git+{url}@" in source
+    assert "/requirements.txt" in source and '"-c", pins' in source
+
+
+def _run_install_cell(tmp_path: Path, prelude: str, **env: str) -> subprocess.CompletedProcess:
+    script = tmp_path / "cell.py"
+    script.write_text(prelude + install_cell.cell_source() + "\n")
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("SGB_")} | env
+    return subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, env=environment
     )
-    assert match, f"{notebook}: no pinned `%pip install` of sgb inside the guard"
-    assert match.group(1) == f"v{version}", (
-        f"{notebook} installs {match.group(1)}, pyproject.toml says v{version}"
-    )
+
+
+def test_a_failed_install_raises(tmp_path):
+    missing = tmp_path / "sgb_companion-0.0.0-py3-none-any.whl"
+    done = _run_install_cell(tmp_path, "", SGB_WHEEL=str(missing))
+    assert done.returncode != 0
+    assert "RuntimeError: installing " + str(missing) + " failed" in done.stderr
+
+
+def test_a_failed_import_raises(tmp_path):
+    done = _run_install_cell(tmp_path, "import sys\nsys.modules['sgb'] = None\n")
+    assert done.returncode != 0
+    assert "RuntimeError: the sgb package is not importable" in done.stderr
+
+
+def test_the_wheel_lists_every_package_and_carries_the_committed_results():
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    subpackages = {
+        ".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "sgb").rglob("__init__.py")
+    }
+    assert subpackages | {"sgb.results"} == set(setuptools["packages"])
+    assert setuptools["package-dir"] == {"sgb.results": "results"}
+    patterns = setuptools["package-data"]["sgb.results"]
+    committed = subprocess.run(
+        ["git", "ls-files", "results"], cwd=ROOT, capture_output=True, text=True, check=True
+    ).stdout.split()
+    for path in committed:
+        inside = Path(path).relative_to("results")
+        assert any(inside.match(p) and len(inside.parts) == len(Path(p).parts) for p in patterns), (
+            f"{path} is committed but not shipped in the wheel"
+        )
 
 
 def test_pinned_versions_satisfy_the_package_dependencies():

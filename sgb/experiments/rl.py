@@ -20,7 +20,7 @@ import numpy as np
 from sgb import stats
 from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.paths import committed_results
-from sgb.provenance import provenance, results_file, write_results
+from sgb.provenance import provenance, read_results, results_file, write_results
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import NetworkConfig
@@ -149,6 +149,13 @@ def summarise_sweep(runs: list[dict]) -> list[dict]:
             }
         )
     return out
+
+
+def best_checkpoint(results_dir: Path, env: str = "ant") -> Path:
+    """The SGB checkpoint with the highest final return in the cpu Figure 3 sweep of ``env``."""
+    runs = read_results(Path(results_dir) / "rl" / f"fig3_{env}_cpu.json")["results"]["runs"]
+    best = max((r for r in runs if r["cell_types"] is not None), key=lambda r: r["final_return"])
+    return Path(results_dir) / CHECKPOINT_DIR / best["checkpoint"]
 
 
 def population_config(profile: str) -> PopulationConfig:
