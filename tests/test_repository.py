@@ -146,3 +146,15 @@ def test_pinned_versions_satisfy_the_package_dependencies():
         assert requirements[name] in requirement.specifier, (
             f"requirements.txt pins {name}=={requirements[name]}, outside {requirement.specifier}"
         )
+
+
+def test_figures_are_named_once_and_captioned():
+    names = []
+    for notebook in NOTEBOOKS:
+        for cell in _load(notebook)["cells"]:
+            figure = cell.get("metadata", {}).get("mystnb", {}).get("figure")
+            if figure:
+                assert figure.get("caption"), f"{notebook}: figure {figure} has no caption"
+                assert figure.get("name", "").startswith("fig-"), f"{notebook}: {figure}"
+                names.append(figure["name"])
+    assert len(names) >= 19 and len(names) == len(set(names))

@@ -47,3 +47,14 @@ def test_gif_holds_every_frame():
     frames[2, 4:] = 128
     gif = Image.open(io.BytesIO(to_gif(frames, seconds_per_frame=0.05)))
     assert gif.format == "GIF" and gif.n_frames == 3
+
+
+def test_importing_the_rl_package_prints_nothing():
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", "import sgb.rl.envs, sgb.rl.render"], capture_output=True, text=True
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == ""
