@@ -158,3 +158,20 @@ def test_figures_are_named_once_and_captioned():
                 assert figure.get("name", "").startswith("fig-"), f"{notebook}: {figure}"
                 names.append(figure["name"])
     assert len(names) >= 19 and len(names) == len(set(names))
+
+
+def test_licence_and_citation_agree_with_the_package():
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    version = re.search(r'__version__ = "(.+)"', (ROOT / "sgb" / "__init__.py").read_text())
+    assert project["license"]["text"] == citation["license"] == "MIT"
+    assert (ROOT / "LICENSE").read_text().startswith("MIT License")
+    assert citation["version"] == version.group(1)
+    assert citation["repository-code"] == install_cell.repository()[0]
+
+
+def test_the_bibliography_holds_the_paper_under_its_own_title():
+    bib = (ROOT / "references.bib").read_text()
+    paper = re.search(r"@misc\{paper,(.*?)\n\}", bib, re.DOTALL).group(1)
+    title = "Stochastic Wiring of Cell Types Enhances Fitness by Generating Phenotypic Variability"
+    assert title in paper
