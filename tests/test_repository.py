@@ -107,6 +107,18 @@ def test_a_failed_install_raises(tmp_path):
     assert "RuntimeError: installing " + str(missing) + " failed" in done.stderr
 
 
+def test_on_a_gpu_the_install_adds_jax_with_its_cuda_plugin(tmp_path):
+    fake = tmp_path / "bin"
+    fake.mkdir()
+    (fake / "nvidia-smi").write_text("#!/bin/sh\nexit 0\n")
+    (fake / "nvidia-smi").chmod(0o755)
+    missing = tmp_path / "sgb_companion-0.0.0-py3-none-any.whl"
+    path = f"{fake}{os.pathsep}{os.environ['PATH']}"
+    done = _run_install_cell(tmp_path, "", SGB_WHEEL=str(missing), PATH=path)
+    assert "RuntimeError: installing" in done.stderr
+    assert f"install -q {missing} jax[cuda12] -c " in done.stderr
+
+
 def test_a_failed_import_raises(tmp_path):
     done = _run_install_cell(tmp_path, "import sys\nsys.modules['sgb'] = None\n")
     assert done.returncode != 0

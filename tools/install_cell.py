@@ -35,8 +35,8 @@ if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ:
     done = subprocess.run(pip, capture_output=True, text=True)
     if done.returncode != 0:
         raise RuntimeError(
-            f"installing {{package}} failed (pip exit status {{done.returncode}}):\\n"
-            + done.stderr[-3000:]
+            f"installing {{package}} failed (pip exit status {{done.returncode}}) in\\n"
+            f"  {{' '.join(pip)}}\\n" + done.stderr[-3000:]
         )
 try:
     import sgb  # noqa: F401 (fails here, not a cell later)
