@@ -1,6 +1,7 @@
 # The two commands of the README, each doing its own set-up:
 #   make book   build the book, executing every chapter at the smoke profile (_build/html)
 #   make test   ruff, the unit tests and every notebook (nbmake)
+#   make reproduce EXPERIMENT=... ARGS=...   one experiment, in the same environment
 
 PYTHON ?= python3
 VENV := .venv
@@ -13,11 +14,13 @@ export PATH := $(CURDIR)/$(BIN):$(PATH)
 export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export SGB_PROFILE := smoke
 
-.PHONY: venv test book clean distclean
+.PHONY: venv test book reproduce clean distclean
 
 venv: $(STAMP)
 
 $(STAMP): requirements.txt pyproject.toml
+	$(PYTHON) -c 'import sys; sys.exit(not (3, 11) <= sys.version_info[:2] <= (3, 12))' \
+	    || { echo "the book needs Python 3.11 or 3.12: make PYTHON=python3.12 ..."; exit 1; }
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --disable-pip-version-check -q -r requirements.txt
 	$(BIN)/python -m pip install --disable-pip-version-check -q --no-deps -e '.[book,test]'
@@ -30,6 +33,10 @@ test: venv
 
 book: venv
 	$(BIN)/jupyter-book build . -W --keep-going
+
+# make reproduce EXPERIMENT=fig3 ARGS="--profile cpu --env ant"
+reproduce: venv
+	$(BIN)/python -m sgb reproduce $(EXPERIMENT) $(ARGS)
 
 clean:
 	rm -rf _build .pytest_cache .ruff_cache *.egg-info

@@ -23,12 +23,6 @@ def init_params(model: nn.Module, key: jax.Array, x: jnp.ndarray) -> Params:
 
 
 @partial(jax.jit, static_argnums=0)
-def apply_individual(model: nn.Module, params: Params, x: jnp.ndarray, key: jax.Array):
-    """Output of the individual drawn with ``key`` on inputs ``x``."""
-    return model.apply(params, x, rngs={"sample": key})
-
-
-@partial(jax.jit, static_argnums=0)
 def apply_mean_network(model: nn.Module, params: Params, x: jnp.ndarray):
     """Output of the mean network (every weight at its type pair's mean)."""
     return model.apply(params, x, mean_network=True)

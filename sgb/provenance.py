@@ -12,12 +12,14 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-TRACKED_PACKAGES = ("sgb", "jax", "jaxlib", "flax", "optax", "brax", "mujoco", "numpy")
+TRACKED_PACKAGES = ("jax", "jaxlib", "flax", "optax", "brax", "mujoco", "numpy")
 
 
 def package_versions() -> dict[str, str]:
-    """Installed versions of python and the packages results depend on."""
-    versions = {"python": platform.python_version()}
+    """Installed versions of python, sgb and the packages results depend on."""
+    from sgb import __version__
+
+    versions = {"python": platform.python_version(), "sgb": __version__}
     for name in TRACKED_PACKAGES:
         try:
             versions[name] = importlib.metadata.version(name)

@@ -79,10 +79,3 @@ def paired_t(a, b) -> TestResult:
     _not_constant("a - b", a - b)
     result = scipy_stats.ttest_rel(a, b)
     return TestResult(float(result.statistic), float(result.pvalue), a.size - 1)
-
-
-def one_sample_t(values, reference: float) -> TestResult:
-    """One-sample t-test of ``values`` against a fixed ``reference`` value; dof = n - 1."""
-    values = _as_1d("values", values)
-    result = scipy_stats.ttest_1samp(values, reference)
-    return TestResult(float(result.statistic), float(result.pvalue), values.size - 1)

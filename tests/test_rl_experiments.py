@@ -14,7 +14,7 @@ def test_summary_divides_by_the_mean_vanilla_return():
         {"cell_types": 16, "seed": 0, "final_return": 50.0},
         {"cell_types": 16, "seed": 1, "final_return": 150.0},
     ]
-    rows = {r["cell_types"]: r for r in rl.summarize_sweep(runs)}
+    rows = {r["cell_types"]: r for r in rl.summarise_sweep(runs)}
     assert rows[None]["fraction"] == pytest.approx(1.0)
     assert rows[16]["fraction"] == pytest.approx(0.5)
     assert rows[16]["sem_fraction"] == pytest.approx(50.0 / 200.0)  # sem of (50, 150) is 50
@@ -38,8 +38,12 @@ def test_correlation_and_paired_test_on_known_populations():
 
 def test_registered_profiles():
     for name in ("fig3", "fig4", "fig5", "spread"):
-        module = get_experiment(name)
-        assert set(module.PROFILES) == {"smoke", "cpu", "paper"}
+        assert set(get_experiment(name).profiles) == {"smoke", "cpu", "paper"}
+    assert get_experiment("fig3").profiles["cpu"]["halfcheetah"] == rl.sweep_config(
+        "halfcheetah", "cpu"
+    )
+    assert get_experiment("fig4").profiles["smoke"].mean_network_conditions == ()
+    assert get_experiment("fig5").profiles["smoke"].conditions == ("normal",)
     paper = rl.sweep_config("ant", "paper")
     assert paper.ppo.num_envs == 2048 and paper.ppo.total_steps == 50_000_000
     assert paper.cell_types == (None, 128, 64, 48, 32, 16) and len(paper.seeds) == 5
@@ -68,7 +72,7 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
     # seeds differ a lot in level, but each population is 5 above its own mean network
     runs = [run(-5.0, s, 100.0 * s + 5.0, 100.0 * s) for s in range(3)]
     runs += [run(-2.0, 0, 40.0, 50.0), run(-2.0, 1, 45.0, 50.0)]
-    narrow, wide = rl_spread.summarize_spread(runs)
+    narrow, wide = rl_spread.summarise_spread(runs)
     assert narrow["advantage"] == 5.0 and narrow["sem_advantage"] == 0.0
     assert narrow["n_seeds"] == 3 and wide["n_seeds"] == 2
     assert wide["advantage"] == -7.5 and np.isclose(wide["sem_advantage"], 2.5)

@@ -1,33 +1,59 @@
-"""Experiments behind the book's figures, one module each, run by ``python -m sgb reproduce``.
+"""Experiments behind the book's figures, run by ``python -m sgb reproduce``.
 
-Each module defines ``PROFILES`` (a dict profile name -> config) and
-``run(profile: str, out_dir: Path, **options) -> Path`` that writes a results
-file with provenance and returns its path.
+Each experiment is registered once, in ``EXPERIMENTS``, by the module that holds
+it, its run function ``run(profile: str, out_dir: Path, **options) -> Path`` (which
+writes a results file with provenance and returns its path) and its profiles
+(a dict profile name -> the config that ``run`` uses at that profile).
 """
 
 import importlib
 import os
-from types import ModuleType
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
 
 PROFILE_NAMES = ("smoke", "cpu", "paper")
 
-# experiment name -> module under sgb.experiments
-EXPERIMENTS: dict[str, str] = {
-    "bbb": "bayes_by_backprop",
-    "theory": "theory",
-    "fig2": "fig2",
-    "fig3": "rl_fig3",
-    "fig4": "rl_fig4",
-    "fig5": "rl_fig5",
-    "spread": "rl_spread",
+
+@dataclass(frozen=True)
+class Experiment:
+    """Where an experiment lives: a module under sgb.experiments and two of its names."""
+
+    module: str
+    run_name: str = "run"
+    profiles_name: str = "PROFILES"
+
+    def _module(self):
+        return importlib.import_module(f"sgb.experiments.{self.module}")
+
+    @property
+    def run(self) -> Callable[..., Path]:
+        """``run(profile, out_dir, **options) -> Path`` of the results file."""
+        return getattr(self._module(), self.run_name)
+
+    @property
+    def profiles(self) -> dict[str, Any]:
+        """Profile name -> the config ``run`` uses at that profile."""
+        return getattr(self._module(), self.profiles_name)
+
+
+EXPERIMENTS: dict[str, Experiment] = {
+    "bbb": Experiment("bayes_by_backprop"),
+    "theory": Experiment("theory"),
+    "fig2": Experiment("fig2"),
+    "fig3": Experiment("rl", "run_fig3", "FIG3_PROFILES"),
+    "fig4": Experiment("rl", "run_fig4", "FIG4_PROFILES"),
+    "fig5": Experiment("rl", "run_fig5", "FIG5_PROFILES"),
+    "spread": Experiment("rl_spread"),
 }
 
 
-def get_experiment(name: str) -> ModuleType:
-    """The module of experiment ``name``."""
+def get_experiment(name: str) -> Experiment:
+    """The registered experiment ``name``."""
     if name not in EXPERIMENTS:
         raise ValueError(f"unknown experiment {name!r}; available: {sorted(EXPERIMENTS)}")
-    return importlib.import_module(f"sgb.experiments.{EXPERIMENTS[name]}")
+    return EXPERIMENTS[name]
 
 
 def check_profile(profile: str) -> str:

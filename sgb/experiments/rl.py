@@ -18,8 +18,9 @@ from pathlib import Path
 import numpy as np
 
 from sgb import stats
-from sgb.experiments import check_profile
-from sgb.provenance import provenance, results_file, write_results
+from sgb.experiments import PROFILE_NAMES, check_profile
+from sgb.paths import committed_results
+from sgb.provenance import provenance, read_results, results_file, write_results
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import NetworkConfig
@@ -27,7 +28,6 @@ from sgb.rl.normalizer import Normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig, train
 
-REPO = Path(__file__).resolve().parents[2]
 CHECKPOINT_DIR = Path("rl") / "checkpoints"
 BACKENDS = {"ant": "spring", "halfcheetah": "spring"}
 
@@ -118,7 +118,7 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
                     "checkpoint": checkpoint.name,
                 }
             )
-    results = {"env": env, "runs": runs, "summary": summarize_sweep(runs)}
+    results = {"env": env, "runs": runs, "summary": summarise_sweep(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
     return write_results(path, results, record)
 
@@ -128,7 +128,7 @@ def seed_sem(values: np.ndarray) -> float:
     return float(stats.sem(values)) if values.size > 1 else float("nan")
 
 
-def summarize_sweep(runs: list[dict]) -> list[dict]:
+def summarise_sweep(runs: list[dict]) -> list[dict]:
     """Per cell-type count: mean final return, SEM over seeds, fraction of vanilla and its SEM.
 
     The fraction divides each seed's return by the mean vanilla return.
@@ -149,6 +149,13 @@ def summarize_sweep(runs: list[dict]) -> list[dict]:
             }
         )
     return out
+
+
+def best_checkpoint(results_dir: Path, env: str = "ant") -> Path:
+    """The SGB checkpoint with the highest final return in the cpu Figure 3 sweep of ``env``."""
+    runs = read_results(Path(results_dir) / "rl" / f"fig3_{env}_cpu.json")["results"]["runs"]
+    best = max((r for r in runs if r["cell_types"] is not None), key=lambda r: r["final_return"])
+    return Path(results_dir) / CHECKPOINT_DIR / best["checkpoint"]
 
 
 def population_config(profile: str) -> PopulationConfig:
@@ -215,19 +222,30 @@ def individuals_vs_mean(returns: dict, condition: str = "normal") -> dict:
     }
 
 
+def fig4_config(profile: str) -> PopulationConfig:
+    """Figure 4: the individuals on every condition; no mean network."""
+    return replace(population_config(profile), mean_network_conditions=())
+
+
+def fig5_config(profile: str) -> PopulationConfig:
+    """Figure 5: the individuals and the mean network on the normal Ant."""
+    return replace(population_config(profile), conditions=("normal",))
+
+
+FIG3_PROFILES = {p: {env: sweep_config(env, p) for env in BACKENDS} for p in PROFILE_NAMES}
+FIG4_PROFILES = {p: fig4_config(p) for p in PROFILE_NAMES}
+FIG5_PROFILES = {p: fig5_config(p) for p in PROFILE_NAMES}
+
+
 def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     if env != "ant":
         raise ValueError(
             f"env must be 'ant' for {figure} (the variants are Ant bodies), got {env!r}"
         )
-    config = population_config(profile)
+    config = fig4_config(profile) if figure == "fig4" else fig5_config(profile)
     path = results_file(Path(out_dir) / "rl", f"{figure}_{env}", profile)
     start = time.perf_counter()
-    if figure == "fig5":
-        config = replace(config, conditions=("normal",))
-    else:
-        config = replace(config, mean_network_conditions=())
-    returns = evaluate_conditions(config, _results_root(out_dir, config))
+    returns = evaluate_conditions(config, checkpoint_root(out_dir, config.checkpoint))
     results = {"returns": returns}
     if figure == "fig4":
         results["legs"] = compare(returns, "normal", "long_legs")
@@ -238,9 +256,9 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     return write_results(path, results, record)
 
 
-def _results_root(out_dir: Path, config: PopulationConfig) -> Path:
-    """Where the checkpoint lies: ``out_dir`` if it has it, else the committed ``results/``."""
-    return Path(out_dir) if (Path(out_dir) / config.checkpoint).exists() else REPO / "results"
+def checkpoint_root(out_dir: Path, checkpoint: str) -> Path:
+    """Where ``checkpoint`` lies: ``out_dir`` if it has it, else the committed results."""
+    return Path(out_dir) if (Path(out_dir) / checkpoint).exists() else committed_results()
 
 
 def run_fig4(profile: str, out_dir: Path, env: str = "ant") -> Path:

@@ -55,7 +55,7 @@ def mean_sigma(actor_params: dict) -> float:
     return float(np.mean([np.mean(sigma) for _, sigma in genome_tables(actor_params).values()]))
 
 
-def summarize_spread(runs: list[dict]) -> list[dict]:
+def summarise_spread(runs: list[dict]) -> list[dict]:
     """Per initial spread: the population's advantage over its mean network (individuals'
     mean return minus the mean network's, mean and SEM over seeds), the spread of the
     individuals' returns and the trained sigma."""
@@ -106,7 +106,7 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
                     "paired_test": individuals_vs_mean(returns),
                 }
             )
-    results = {"env": env, "runs": runs, "summary": summarize_spread(runs)}
+    results = {"env": env, "runs": runs, "summary": summarise_spread(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
     return write_results(path, results, record)
 

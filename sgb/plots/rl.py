@@ -1,12 +1,10 @@
 """Figures of chapter 5: cell-type sweeps (Fig. 3C/D), population scatters (4E/F), mean network (5),
-the initial-spread sweep, and drawings of the Ant's body."""
+the initial-spread sweep, and rendered frames of the bodies."""
 
-import mujoco
 import numpy as np
 
 from sgb import stats
 from sgb.plots import PALETTE, subplots
-from sgb.rl.envs import variant_xml
 
 
 def plot_sweep(summary: list[dict], env: str, ax=None):
@@ -113,50 +111,13 @@ def plot_spread(summary: list[dict], axes=None):
     return axes
 
 
-def _capsules(xml: str) -> list[tuple[np.ndarray, np.ndarray, float]]:
-    """World end points and radius of every capsule and sphere at Brax's initial pose
-    (the model's ``init_qpos`` numeric)."""
-    model = mujoco.MjModel.from_xml_string(xml)
-    data = mujoco.MjData(model)
-    data.qpos[:] = model.numeric("init_qpos").data
-    mujoco.mj_forward(model, data)
-    out = []
-    for g in range(model.ngeom):
-        kind, size = model.geom_type[g], model.geom_size[g]
-        centre = data.geom_xpos[g]
-        if kind == mujoco.mjtGeom.mjGEOM_CAPSULE:
-            axis = data.geom_xmat[g].reshape(3, 3)[:, 2] * size[1]
-            out.append((centre - axis, centre + axis, float(size[0])))
-        elif kind == mujoco.mjtGeom.mjGEOM_SPHERE:
-            out.append((centre, centre, float(size[0])))
-    return out
-
-
-def draw_ant(variants: tuple[str, ...] = ("normal", "long_legs"), axes=None):
-    """Side and top views of the Ant's body in each variant, drawn from MuJoCo's geometry."""
+def show_images(images: dict[str, np.ndarray], axes=None):
+    """Rendered frames (height, width, 3) side by side, titled by their keys."""
     if axes is None:
-        _, axes = subplots(2, len(variants), figsize=(3.2 * len(variants), 5.5), squeeze=False)
-    for col, variant in enumerate(variants):
-        parts = _capsules(variant_xml("ant", variant))
-        for row, (i, j, name) in enumerate(((0, 2, "x (m)"), (0, 1, "x (m)"))):
-            ax = axes[row][col]
-            for p, q, radius in parts:
-                ax.plot(
-                    [p[i], q[i]],
-                    [p[j], q[j]],
-                    lw=radius * 120,
-                    solid_capstyle="round",
-                    color="#8c6d4f",
-                )
-            ax.set_aspect("equal")
-            ax.set_xlabel(name)
-            ax.set_ylabel("z (m)" if row == 0 else "y (m)")
-            ax.set_xlim(-1.3, 1.3)
-            if row == 0:
-                ax.set_ylim(-0.1, 1.2)
-                ax.axhline(0.0, color="0.5", lw=1)
-                ax.set_title(f"{variant.replace('_', ' ')}: side")
-            else:
-                ax.set_ylim(-1.3, 1.3)
-                ax.set_title("top")
+        _, axes = subplots(1, len(images), figsize=(4.0 * len(images), 3.2), squeeze=False)
+        axes = axes[0]
+    for ax, (title, image) in zip(axes, images.items(), strict=True):
+        ax.imshow(image)
+        ax.set_title(title)
+        ax.set_axis_off()
     return axes

@@ -27,7 +27,7 @@ The vanilla network is the special case with no sampling and no KL.
 """
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from functools import partial
 from typing import NamedTuple
 
@@ -411,8 +411,3 @@ def train(config: PPOConfig, seed: int = 0, progress: bool = True) -> TrainResul
         train_steps_per_s=timed_steps / max(timed_s, 1e-9),
         wall_time_s=time.perf_counter() - start,
     )
-
-
-def with_steps(config: PPOConfig, total_steps: int) -> PPOConfig:
-    """``config`` with another step budget."""
-    return replace(config, total_steps=total_steps)

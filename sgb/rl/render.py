@@ -1,0 +1,123 @@
+"""Pictures of Brax bodies with MuJoCo's offscreen renderer: still images and walking GIFs.
+
+MuJoCo renders through a headless OpenGL (EGL on Linux, see ``sgb.rl``). Frames are
+RGB arrays of shape (height, width, 3), uint8.
+"""
+
+import functools
+import io
+from pathlib import Path
+
+import jax
+import jax.numpy as jnp
+import mujoco
+import numpy as np
+from PIL import Image
+
+from sgb.rl import checkpoints
+from sgb.rl.envs import EnvSpec, make_env, variant_xml
+from sgb.rl.networks import MLP, NetworkConfig, action_distribution, apply, individuals
+from sgb.rl.normalizer import Normalizer, normalize
+
+CAMERA = "track"  # the Ant's camera, following its centre of mass from the side
+
+
+@functools.cache
+def mj_model(spec: EnvSpec) -> mujoco.MjModel:
+    """The MuJoCo model of the body of ``spec``, from its variant's own MJCF."""
+    return mujoco.MjModel.from_xml_string(variant_xml(spec.name, spec.variant))
+
+
+def render_poses(
+    spec: EnvSpec, qpos: np.ndarray, width: int = 320, height: int = 240
+) -> np.ndarray:
+    """Frames (T, height, width, 3) of the body of ``spec`` at joint positions ``qpos`` (T, nq)."""
+    model = mj_model(spec)
+    data = mujoco.MjData(model)
+    camera = CAMERA if mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_CAMERA, CAMERA) >= 0 else -1
+    frames = []
+    with mujoco.Renderer(model, height=height, width=width) as renderer:
+        for q in np.asarray(qpos):
+            data.qpos[:] = q
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera=camera)
+            frames.append(renderer.render().copy())
+    return np.stack(frames)
+
+
+def initial_pose(spec: EnvSpec, width: int = 320, height: int = 240) -> np.ndarray:
+    """One frame (height, width, 3) of the body of ``spec`` in Brax's initial pose."""
+    model = mj_model(spec)
+    qpos = model.numeric("init_qpos").data if model.nnumeric else model.qpos0
+    return render_poses(spec, np.asarray(qpos)[None], width, height)[0]
+
+
+@functools.partial(jax.jit, static_argnames=("spec", "network", "steps"))
+def _trajectories(
+    spec: EnvSpec,
+    network: NetworkConfig,
+    actor_params: dict,
+    normalizer: Normalizer,
+    ind_keys: jax.Array,
+    reset_key: jax.Array,
+    steps: int,
+) -> jnp.ndarray:
+    """Joint positions (N, steps + 1, nq) of N individuals from one shared initial state."""
+    env = make_env(spec)
+    actor = MLP(network, 2 * env.action_size)
+    layers, _ = individuals(actor, actor_params, ind_keys, env.observation_size)
+    n = ind_keys.shape[0]
+    state = jax.vmap(env.reset)(jnp.broadcast_to(reset_key, (n, *reset_key.shape)))
+
+    def step(state, _):
+        logits = apply(layers, normalize(normalizer, state.obs), network.sgb)
+        loc, _ = action_distribution(logits)
+        state = jax.vmap(env.step)(state, jnp.tanh(loc))
+        return state, state.pipeline_state.q
+
+    _, qs = jax.lax.scan(step, state, None, steps)
+    return jnp.concatenate([state.pipeline_state.q[None], qs]).swapaxes(0, 1)
+
+
+def walking_frames(
+    checkpoint: str | Path,
+    n_individuals: int = 4,
+    steps: int = 100,
+    every: int = 2,
+    seed: int = 0,
+    width: int = 200,
+    height: int = 200,
+) -> np.ndarray:
+    """Frames (T, height, n_individuals * width, 3) of individuals side by side.
+
+    The individuals are drawn from the genome of ``checkpoint`` with keys split from
+    ``seed`` and start from the same initial state; each walks ``steps`` control steps
+    with deterministic actions, and every ``every``-th step is drawn.
+    """
+    if n_individuals < 1 or steps < 1 or every < 1:
+        raise ValueError(
+            "n_individuals, steps and every must be positive, "
+            f"got {n_individuals}, {steps}, {every}"
+        )
+    ppo, params, normalizer, _ = checkpoints.load(checkpoint)
+    ind_key, reset_key = jax.random.split(jax.random.PRNGKey(seed))
+    keys = jax.random.split(ind_key, n_individuals)
+    qpos = _trajectories(ppo.env, ppo.network, params.actor, normalizer, keys, reset_key, steps)
+    qpos = np.asarray(qpos)[:, ::every]
+    panels = [render_poses(ppo.env, q, width, height) for q in qpos]
+    return np.concatenate(panels, axis=2)
+
+
+def to_gif(frames: np.ndarray, seconds_per_frame: float) -> bytes:
+    """An endlessly looping GIF of ``frames`` (T, height, width, 3)."""
+    images = [Image.fromarray(frame) for frame in frames]
+    buffer = io.BytesIO()
+    images[0].save(
+        buffer,
+        format="gif",
+        save_all=True,
+        append_images=images[1:],
+        duration=max(20, round(1000 * seconds_per_frame)),
+        loop=0,
+    )
+    return buffer.getvalue()
