@@ -2,8 +2,8 @@
 
 ``run(profile, out_dir, dataset=...)`` sweeps SGB, DGB and the uncompressed
 network over compression ratios and seeds on one dataset and writes
-``fig2_<dataset>.json`` (``fig2_<dataset>_smoke.json`` at the smoke profile,
-so a quick check never overwrites committed results) with provenance.
+``fig2_<dataset>_<profile>.json`` with provenance (one file per profile, so a smoke
+run never overwrites committed results; see ``sgb.provenance.results_file``).
 
 KL choice (see the book's chapter 4): the KL to a N(0, 0.1^2) prior is counted
 once per type pair (``kl_counting="table"``, the genome view) and weighted
