@@ -1,21 +1,26 @@
-"""Benchmarks of sgb.rl on this machine.
+"""Benchmarks of sgb.rl on this machine, all ratios taken in one run.
 
 1. Vanilla PPO of ``sgb.rl`` against ``brax.training.agents.ppo.train`` on the
-   same environment, backend, step budget and hyperparameters: final
-   evaluation return and training env-steps/s.
-2. Population evaluation: env-steps/s of 100 SGB individuals evaluated in one
+   same environment, backend, step budget and hyperparameters (deterministic
+   evaluation on ``eval_individuals`` episodes on both sides), over several
+   seeds: final evaluation return and training env-steps/s.
+2. SGB-PPO (64 cell types) against our vanilla PPO: env-steps/s and final return.
+3. Population evaluation: env-steps/s of 100 SGB individuals evaluated in one
    vmapped call, against stepping the bare environment with random actions at
    the same batch size.
 
-Usage: ``python benchmarks/bench_rl.py [--steps 200000] [--out results/rl/bench_rl.json]``.
+Usage: ``python benchmarks/bench_rl.py [--steps 2000000] [--seeds 0 1 2]
+[--out results/rl/bench_rl.json]``.
 """
 
 import argparse
 import functools
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import jax
+import numpy as np
 from brax.training.agents.ppo import networks as brax_networks
 from brax.training.agents.ppo import train as brax_ppo
 
@@ -63,6 +68,7 @@ def brax_reference(config: PPOConfig, seed: int) -> dict:
         reward_scaling=config.reward_scaling,
         num_evals=config.num_evals + 1,
         num_eval_envs=config.eval_individuals,
+        deterministic_eval=True,
         network_factory=network_factory,
         seed=seed,
         progress_fn=lambda step, metrics: reports.append((step, dict(metrics))),
@@ -114,26 +120,44 @@ def population_throughput(n: int = 100, episode_length: int = 1000) -> dict:
     }
 
 
+def _mean(runs: list[dict], key: str) -> float:
+    return float(np.mean([run[key] for run in runs]))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
-    parser.add_argument("--steps", type=int, default=200_000)
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--steps", type=int, default=2_000_000)
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
     parser.add_argument("--out", type=Path, default=Path("results/rl/bench_rl.json"))
     args = parser.parse_args()
     config = PPOConfig(env=EnvSpec("ant", "spring"), total_steps=args.steps, num_evals=4)
+    sgb_config = replace(config, network=NetworkConfig(cell_types=64))
     start = time.perf_counter()
     results = {"throughput": population_throughput()}
     print(results["throughput"])
-    results["ours"] = ours(config, args.seed)
-    print("ours", results["ours"])
-    results["brax"] = brax_reference(config, args.seed)
-    print("brax", results["brax"])
-    results["return_ratio"] = results["ours"]["final_return"] / results["brax"]["final_return"]
-    results["sps_ratio"] = (
-        results["ours"]["train_steps_per_s"] / results["brax"]["train_steps_per_s"]
+    for name, run in (
+        ("ours", lambda seed: ours(config, seed)),
+        ("brax", lambda seed: brax_reference(config, seed)),
+        ("sgb_64_types", lambda seed: ours(sgb_config, seed)),
+    ):
+        results[name] = []
+        for seed in args.seeds:
+            results[name].append({"seed": seed, **run(seed)})
+            print(name, results[name][-1])
+    for name in ("ours", "brax", "sgb_64_types"):
+        results[f"{name}_mean_final_return"] = _mean(results[name], "final_return")
+        results[f"{name}_mean_steps_per_s"] = _mean(results[name], "train_steps_per_s")
+    results["return_ratio_ours_to_brax"] = (
+        results["ours_mean_final_return"] / results["brax_mean_final_return"]
     )
-    print({k: results[k] for k in ("return_ratio", "sps_ratio")})
-    record = provenance(config, "benchmark", [args.seed], time.perf_counter() - start)
+    results["sps_ratio_ours_to_brax"] = (
+        results["ours_mean_steps_per_s"] / results["brax_mean_steps_per_s"]
+    )
+    results["sps_ratio_sgb_to_ours"] = (
+        results["sgb_64_types_mean_steps_per_s"] / results["ours_mean_steps_per_s"]
+    )
+    print({k: v for k, v in results.items() if not isinstance(v, list | dict)})
+    record = provenance(config, "benchmark", args.seeds, time.perf_counter() - start)
     print("wrote", write_results(args.out, results, record))
 
 

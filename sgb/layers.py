@@ -4,9 +4,9 @@ A layer holds a type table ``mu`` and ``rho`` (sigma = softplus(rho)) and
 per-neuron biases. Each call draws every synapse's weight independently from
 its type pair's Gaussian, using the ``"sample"`` PRNG stream, or uses the
 means alone when ``mean_network=True``. The KL term of the layer is sown into
-the ``"losses"`` collection and the drawn kernel into ``"individual"`` (each
-apply replaces what an earlier one sowed). ``sgb.population.init_params``
-initialises a model's parameters alone.
+the ``"losses"`` collection and the drawn kernel and its standard normal
+noise into ``"individual"`` (each apply replaces what an earlier one sowed).
+``sgb.population.init_params`` initialises a model's parameters alone.
 
 With as many types as neurons the layer is a Bayes-by-backprop layer; with one
 type per side, one distribution for the whole layer.
@@ -111,6 +111,29 @@ def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarra
     return jnp.repeat(y, type_sizes(features, k_out), axis=-1, total_repeat_length=features)
 
 
+def weight_noise(key: jax.Array, shape: tuple[int, ...]) -> jnp.ndarray:
+    """Standard normal noise of ``shape``: one independent draw per synapse."""
+    return jax.random.normal(key, shape)
+
+
+def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
+    """An individual's full kernel from type tables ``mu``, ``rho`` (k_in, k_out, ...) and
+    its ``noise`` (n_in, n_out, ...): mu + softplus(rho) * noise, each synapse from its pair."""
+    return expand_table(mu, noise.shape) + expand_table(jax.nn.softplus(rho), noise.shape) * noise
+
+
+def sample_kernel(
+    mu: jnp.ndarray, rho: jnp.ndarray, key: jax.Array, shape: tuple[int, ...]
+) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """The individual drawn with ``key``: its kernel of ``shape`` and the noise that made it.
+
+    The one way to draw an individual's weights, used by these layers and by the RL
+    actor-critic (``sgb.rl.networks``) alike.
+    """
+    noise = weight_noise(key, shape)
+    return individual_kernel(mu, rho, noise), noise
+
+
 def _replace(_previous, new):
     """Sow reducer that keeps only the latest value, so repeated applies never accumulate."""
     return new
@@ -143,14 +166,13 @@ class _GenomeKernel(nn.Module):
                 kl = _count_pairs(per_pair, counts, self.kl_counting)
                 self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
             return mu, sigma
-        mu_full = expand_table(mu, self.shape)
         if mean_network:
-            kernel = mu_full
+            kernel = expand_table(mu, self.shape)
         else:
-            eps = jax.random.normal(self.make_rng("sample"), self.shape, mu.dtype)
-            kernel = mu_full + expand_table(sigma, self.shape) * eps
+            kernel, noise = sample_kernel(mu, rho, self.make_rng("sample"), self.shape)
             kl = genome_kl(self.prior, mu, sigma, kernel, self.kl_counting)
             self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
+            self.sow("individual", "noise", noise, init_fn=lambda: None, reduce_fn=_replace)
         self.sow("individual", "kernel", kernel, init_fn=lambda: None, reduce_fn=_replace)
         return kernel
 

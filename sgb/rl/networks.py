@@ -8,8 +8,11 @@ mode every layer is ``nn.Dense``.
 
 An individual is a *phenotype*: the list of (kernel, bias) of every layer,
 drawn once from the genome with a PRNG key and then used unchanged for a whole
-episode. ``forward`` runs a phenotype; it is the only forward pass used in
-training and evaluation, so the same key always gives the same behaviour.
+episode. Its weight noise is drawn by the SGB layers (``draw_noise``), so a key
+gives the same individual here as in ``sgb.layers``; ``individuals`` turns noise
+into phenotypes under the current genome. ``forward`` runs a phenotype; it is
+the only forward pass used in training and evaluation, so the same key always
+gives the same behaviour.
 """
 
 from dataclasses import dataclass
@@ -17,14 +20,14 @@ from dataclasses import dataclass
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from sgb import validation
-from sgb.celltypes import assign_cell_types
-from sgb.layers import SGBDense
+from sgb.celltypes import expand_table
+from sgb.layers import SGBDense, genome_kl, individual_kernel
 from sgb.priors import GaussianPrior, Prior, ScaleMixturePrior
 
 Phenotype = list[tuple[jnp.ndarray, jnp.ndarray]]
+Noise = list[jnp.ndarray]  # standard normal noise of each hidden kernel
 MIN_STD = 1e-3
 
 
@@ -86,66 +89,61 @@ class MLP(nn.Module):
         return nn.Dense(self.out, name="out")(x)
 
 
-def _membership(n: int, k: int) -> jnp.ndarray:
-    """One-hot cell-type membership (n, k) of n neurons in k contiguous balanced types."""
-    return jnp.asarray(np.eye(k, dtype=np.float32)[assign_cell_types(n, k)])
-
-
 def _prior(config: NetworkConfig) -> Prior:
     """The weight prior named in ``config``."""
     return GaussianPrior(0.1) if config.prior == "gaussian" else ScaleMixturePrior()
 
 
-def phenotype(
-    model: MLP, params: dict, key: jax.Array | None, obs_size: int
-) -> tuple[Phenotype, jnp.ndarray]:
-    """The individual drawn with ``key`` (``None``: the mean network) and its KL (nats).
+def draw_noise(model: MLP, params: dict, key: jax.Array, obs_size: int) -> Noise | None:
+    """The noise of the individual drawn with ``key``: per hidden layer, shape (n_in, n_out).
 
-    Returns the list of (kernel (n_in, n_out), bias (n_out,)) of every layer
-    and the Monte Carlo KL of this draw to the prior, summed over synapses
-    (log q(w) - log p(w), as in Bayes by backprop; 0 for vanilla networks and
-    the mean network). Differentiable in ``params`` (reparameterised).
+    Drawn by the SGB layers themselves (``sgb.layers.sample_kernel``), so key ``k``
+    gives here the individual that ``model.apply(params, x, rngs={"sample": k})`` is.
+    ``None`` for vanilla networks, which have no noise. vmap it for many keys.
+    """
+    if not model.config.sgb:
+        return None
+    dummy = jnp.zeros((1, obs_size))
+    _, state = model.apply(params, dummy, rngs={"sample": key}, mutable=["individual"])
+    drawn = state["individual"]
+    return [drawn[f"hidden_{i}"]["genome"]["noise"] for i in range(len(model.config.hidden))]
 
-    A hidden layer's kernel is M_in mu M_out^T + (M_in sigma M_out^T) * eps
-    with one-hot type memberships M and eps ~ N(0, 1) drawn from
-    ``fold_in(key, layer)``: the same distribution as ``sgb.layers.SGBDense``
-    (whose mean network it reproduces exactly), written with matrix products
-    so that gradients of many individuals at once stay cheap on a CPU.
+
+def individuals(model: MLP, params: dict, noise: Noise | None) -> tuple[Phenotype, jnp.ndarray]:
+    """Phenotypes from ``noise`` (``draw_noise`` vmapped: leading axis N) and KLs (N,), nats.
+
+    Each hidden kernel is ``sgb.layers.individual_kernel(mu, rho, noise)`` and its KL
+    ``sgb.layers.genome_kl`` (per synapse; closed form for a Gaussian prior).
+    Differentiable in ``params`` (reparameterised). For ``noise=None`` (vanilla networks,
+    or the mean network) returns the one deterministic phenotype without a leading axis
+    and KL 0; ``apply`` then shares it across the batch.
     """
     cfg, p = model.config, params["params"]
-    layers, kl, n_in = [], jnp.zeros(()), obs_size
-    for i, width in enumerate(cfg.hidden):
-        layer = p[f"hidden_{i}"]
-        if not cfg.sgb:
-            layers.append((layer["kernel"], layer["bias"]))
-            continue
-        mu, rho = layer["genome"]["mu"], layer["genome"]["rho"]
-        m_in, m_out = _membership(n_in, mu.shape[0]), _membership(width, mu.shape[1])
-        kernel = m_in @ mu @ m_out.T
-        if key is not None:
-            sigma = m_in @ jax.nn.softplus(rho) @ m_out.T
-            eps = jax.random.normal(jax.random.fold_in(key, i), kernel.shape)
-            kernel = kernel + sigma * eps
-            log_q = jnp.sum(-0.5 * eps**2 - jnp.log(sigma) - 0.5 * jnp.log(2 * jnp.pi))
-            kl = kl + log_q - jnp.sum(_prior(cfg).log_prob(kernel))
-        layers.append((kernel, layer["bias"]))
-        n_in = width
-    layers.append((p["out"]["kernel"], p["out"]["bias"]))
-    return layers, kl
+    prior = _prior(cfg)
+    hidden = [p[f"hidden_{i}"] for i in range(len(cfg.hidden))]
+    out = (p["out"]["kernel"], p["out"]["bias"])
+    if not cfg.sgb:
+        return [(layer["kernel"], layer["bias"]) for layer in hidden] + [out], jnp.zeros(())
+    if noise is None:
+        fan_ins = [hidden[0]["genome"]["mu"].shape[0], *cfg.hidden[:-1]]  # first: 1 type/entry
+        kernels = [
+            expand_table(layer["genome"]["mu"], (n, w))
+            for layer, n, w in zip(hidden, fan_ins, cfg.hidden, strict=True)
+        ]
+        return [(k, layer["bias"]) for k, layer in zip(kernels, hidden, strict=True)] + [
+            out
+        ], jnp.zeros(())
 
+    def one(eps: Noise) -> tuple[Phenotype, jnp.ndarray]:
+        layers, kl = [], jnp.zeros(())
+        for layer, e in zip(hidden, eps, strict=True):
+            mu, rho = layer["genome"]["mu"], layer["genome"]["rho"]
+            kernel = individual_kernel(mu, rho, e)
+            kl = kl + genome_kl(prior, mu, jax.nn.softplus(rho), kernel, "synapse")
+            layers.append((kernel, layer["bias"]))
+        return layers + [out], kl
 
-def individuals(
-    model: MLP, params: dict, keys: jax.Array | None, obs_size: int
-) -> tuple[Phenotype, jnp.ndarray]:
-    """Phenotypes of one individual per key (leading axis N) and their KLs, shape (N,).
-
-    For vanilla networks, or ``keys=None`` (the mean network), returns the one
-    deterministic phenotype without a leading axis and KL 0; ``apply`` then
-    shares it across the batch.
-    """
-    if model.config.sgb and keys is not None:
-        return jax.vmap(lambda k: phenotype(model, params, k, obs_size))(keys)
-    return phenotype(model, params, None, obs_size)
+    return jax.vmap(one)(noise)
 
 
 def apply(layers: Phenotype, x: jnp.ndarray, batched: bool) -> jnp.ndarray:

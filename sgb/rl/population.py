@@ -14,7 +14,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from sgb.rl.envs import EnvSpec, make_env
-from sgb.rl.networks import MLP, NetworkConfig, action_distribution, apply, individuals
+from sgb.rl.networks import (
+    MLP,
+    NetworkConfig,
+    action_distribution,
+    apply,
+    draw_noise,
+    individuals,
+)
 from sgb.rl.normalizer import Normalizer, normalize
 
 
@@ -32,8 +39,13 @@ def _returns(
     or every row by the mean network when ``ind_keys`` is None."""
     env = make_env(spec)
     actor = MLP(network, 2 * env.action_size)
-    layers, _ = individuals(actor, actor_params, ind_keys, env.observation_size)
-    batched = network.sgb and ind_keys is not None
+    noise = (
+        None
+        if ind_keys is None
+        else jax.vmap(lambda k: draw_noise(actor, actor_params, k, env.observation_size))(ind_keys)
+    )
+    layers, _ = individuals(actor, actor_params, noise)
+    batched = noise is not None
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 
     def step(carry, _):

@@ -3,11 +3,12 @@
 One training iteration:
 
 1. *Births.* Every parallel environment whose episode ended during the last
-   unroll is reset, and a new individual is born for it: a fresh PRNG key,
-   from which its actor and critic weights are drawn from the current genome
-   (``sgb.rl.networks.individuals``). Environments still in an episode keep
-   their individual's key. So an individual lives exactly one episode, and
-   each of the ``num_envs`` environments runs its own individual.
+   unroll is reset, and a new individual is born for it: from a fresh PRNG
+   key, the weight noise of its actor and critic is drawn once
+   (``sgb.rl.networks.draw_noise``) and kept for its whole life. Its weights
+   are that noise under the current genome (``sgb.rl.networks.individuals``).
+   So an individual lives exactly one episode, and each of the ``num_envs``
+   environments runs its own individual.
 2. *Unroll.* Each environment runs ``unroll_length`` steps. Actions are
    tanh(u), u ~ N(loc, scale) from the individual's actor. An environment
    whose episode ends waits, masked out, until the unroll is over (no
@@ -15,13 +16,13 @@ One training iteration:
    individual. Episodes are cut at ``episode_length`` steps (truncation:
    the value of the last state is bootstrapped).
 3. *Update.* ``num_epochs`` passes over the unrolls in ``num_minibatches``
-   minibatches of environments. For each unroll the individual's weights are
-   drawn again *from its stored key under the current genome*: the PPO
-   ratio pi_new(a|s) / pi_old(a|s) compares the same individual (same noise
-   draw) before and after the genome update, as reparameterised sampling
-   allows. Loss = PPO clip loss + c1 value loss - c2 entropy
-   + c3 (KL of actor and critic genomes, averaged over the minibatch's
-   individuals). Advantages by GAE, normalised over the valid steps.
+   minibatches of environments. Each unroll's individual is rebuilt from its
+   kept noise *under the current genome*: the PPO ratio
+   pi_new(a|s) / pi_old(a|s) compares the same individual (same noise draw)
+   before and after the genome update, as reparameterised sampling allows.
+   Loss = PPO clip loss + c1 value loss - c2 entropy + c3 (KL of actor and
+   critic genomes, averaged over the minibatch's individuals). Advantages by
+   GAE, normalised over the valid steps.
 
 The vanilla network is the special case with no sampling and no KL.
 """
@@ -43,8 +44,10 @@ from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
     MLP,
     NetworkConfig,
+    Noise,
     action_distribution,
     apply,
+    draw_noise,
     gaussian_entropy,
     individuals,
     tanh_gaussian_log_prob,
@@ -124,7 +127,8 @@ class TrainState(NamedTuple):
     env_state: object
     steps: jnp.ndarray  # (E,) steps into the current episode
     finished: jnp.ndarray  # (E,) 1.0 where the episode ended
-    ind_keys: jax.Array  # (E, 2) key of each environment's individual
+    actor_noise: Noise | None  # per hidden layer (E, n_in, n_out), drawn at each birth
+    critic_noise: Noise | None  # None for vanilla networks
     key: jax.Array
 
 
@@ -137,7 +141,8 @@ class Unroll(NamedTuple):
     truncation: jnp.ndarray
     valid: jnp.ndarray
     last_obs: jnp.ndarray  # (E, obs)
-    ind_keys: jax.Array  # (E, 2)
+    actor_noise: Noise | None  # per hidden layer (E, n_in, n_out); None for vanilla
+    critic_noise: Noise | None
 
 
 @dataclass
@@ -158,8 +163,31 @@ def _models(config: PPOConfig):
     return env, MLP(config.network, 2 * env.action_size), MLP(config.network, 1)
 
 
-def _critic_keys(keys: jax.Array) -> jax.Array:
-    return jax.vmap(lambda k: jax.random.fold_in(k, 1))(keys)
+def _births(
+    ts: TrainState, config: PPOConfig, fresh: jnp.ndarray, key: jax.Array
+) -> tuple[Noise | None, Noise | None]:
+    """Actor and critic noise with a new individual for every ``fresh`` environment.
+
+    Only newborns draw (``lax.cond`` per environment); the others keep their noise.
+    The individual born from key k has the actor of ``draw_noise(actor, ., k)`` and
+    the critic of ``draw_noise(critic, ., fold_in(k, 1))``.
+    """
+    env, actor, critic = _models(config)
+    if not config.network.sgb:
+        return None, None
+
+    def draw(k: jax.Array) -> tuple[Noise, Noise]:
+        return (
+            draw_noise(actor, ts.params.actor, k, env.observation_size),
+            draw_noise(critic, ts.params.critic, jax.random.fold_in(k, 1), env.observation_size),
+        )
+
+    def renew(args):
+        born, k, old = args
+        return jax.lax.cond(born, draw, lambda _: old, k)
+
+    keys = jax.random.split(key, config.num_envs)
+    return jax.lax.map(renew, (fresh, keys, (ts.actor_noise, ts.critic_noise)))
 
 
 def gae(reward, value, next_value, done, truncation, discount, lam):
@@ -187,12 +215,10 @@ def _masked_mean(x, mask):
 
 
 def _loss(params: Params, data: Unroll, normalizer: Normalizer, config: PPOConfig):
-    env, actor, critic = _models(config)
+    _, actor, critic = _models(config)
     sgb = config.network.sgb
-    a_layers, a_kl = individuals(actor, params.actor, data.ind_keys, env.observation_size)
-    c_layers, c_kl = individuals(
-        critic, params.critic, _critic_keys(data.ind_keys), env.observation_size
-    )
+    a_layers, a_kl = individuals(actor, params.actor, data.actor_noise)
+    c_layers, c_kl = individuals(critic, params.critic, data.critic_noise)
     obs = normalize(normalizer, data.obs)
     all_obs = jnp.concatenate([obs, normalize(normalizer, data.last_obs)[:, None]], axis=1)
     values = apply(c_layers, all_obs, sgb)[..., 0]
@@ -256,16 +282,28 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
     # strong types, as the training step returns them (weak types would force a recompile)
     env_state = jax.tree_util.tree_map(_strong, env_state)
     e = config.num_envs
-    return TrainState(
+    ts = TrainState(
         params=params,
         opt_state=_optimizer(config).init(params),
         normalizer=init_normalizer(env.observation_size),
         env_state=env_state,
         steps=jnp.zeros(e),
         finished=jnp.zeros(e),
-        ind_keys=jax.random.split(ki, e),
+        actor_noise=None,
+        critic_noise=None,
         key=key,
     )
+    if not config.network.sgb:
+        return ts
+    shapes = zip(
+        (env.observation_size, *config.network.hidden), config.network.hidden, strict=False
+    )
+    zeros = [jnp.zeros((e, n_in, n_out)) for n_in, n_out in shapes]
+    ts = ts._replace(actor_noise=zeros, critic_noise=list(zeros))
+    actor_noise, critic_noise = jax.jit(_births, static_argnums=1)(
+        ts, config, jnp.ones(e, bool), ki
+    )
+    return ts._replace(actor_noise=actor_noise, critic_noise=critic_noise)
 
 
 def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
@@ -279,9 +317,9 @@ def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
         return jnp.where(fresh.reshape((e,) + (1,) * (old.ndim - 1)), new, old)
 
     env_state = jax.tree_util.tree_map(pick, resets, ts.env_state)
-    ind_keys = pick(jax.random.split(k_birth, e), ts.ind_keys)
+    actor_noise, critic_noise = _births(ts, config, fresh, k_birth)
     steps = jnp.where(fresh, 0.0, ts.steps)
-    layers, _ = individuals(actor, ts.params.actor, ind_keys, env.observation_size)
+    layers, _ = individuals(actor, ts.params.actor, actor_noise)
 
     def step(carry, k):
         state, steps, finished = carry
@@ -302,9 +340,14 @@ def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
     keys = jax.random.split(k_act, config.unroll_length)
     (env_state, steps, finished), out = jax.lax.scan(step, carry, keys)
     out = [jnp.swapaxes(x, 0, 1) for x in out]
-    data = Unroll(*out, last_obs=env_state.obs, ind_keys=ind_keys)
+    data = Unroll(*out, last_obs=env_state.obs, actor_noise=actor_noise, critic_noise=critic_noise)
     ts = ts._replace(
-        env_state=env_state, steps=steps, finished=finished, ind_keys=ind_keys, key=key
+        env_state=env_state,
+        steps=steps,
+        finished=finished,
+        actor_noise=actor_noise,
+        critic_noise=critic_noise,
+        key=key,
     )
     return ts, data
 
