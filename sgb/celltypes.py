@@ -6,6 +6,7 @@ multiple of ``k`` the first ``n % k`` types get one neuron more.
 
 from collections.abc import Sequence
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -50,8 +51,26 @@ def expand_table(table: jnp.ndarray, shape: Sequence[int]) -> jnp.ndarray:
     out = table
     for axis, (k, n) in enumerate(zip(table.shape, shape, strict=True)):
         _check_counts(n, k, f"shape[{axis}]", f"table.shape[{axis}]")
-        out = jnp.take(out, assign_cell_types(n, k), axis=axis)
+        out = _repeat_blocks(out, axis, n)
     return out
+
+
+def _repeat_blocks(x: jnp.ndarray, axis: int, n: int) -> jnp.ndarray:
+    """Repeat the k entries of ``x`` along ``axis`` into n balanced contiguous blocks.
+
+    Written as broadcasts of the types of each block size (not a gather), so the
+    gradient is a sum over each block rather than a scatter.
+    """
+    k = x.shape[axis]
+    q, r = divmod(n, k)
+    parts = []
+    for lo, hi, size in ((0, r, q + 1), (r, k, q)):
+        if hi == lo:
+            continue
+        part = jnp.expand_dims(jax.lax.slice_in_dim(x, lo, hi, axis=axis), axis + 1)
+        part = jnp.broadcast_to(part, part.shape[: axis + 1] + (size,) + part.shape[axis + 2 :])
+        parts.append(part.reshape(x.shape[:axis] + ((hi - lo) * size,) + x.shape[axis + 1 :]))
+    return jnp.concatenate(parts, axis=axis)
 
 
 def block_counts(shape: Sequence[int], types: Sequence[int]) -> np.ndarray:
