@@ -57,6 +57,7 @@ def brax_reference(config: PPOConfig, seed: int) -> dict:
         num_envs=config.num_envs,
         learning_rate=config.learning_rate,
         entropy_cost=config.entropy_coef,
+        vf_loss_coefficient=config.value_coef,
         discounting=config.discount,
         gae_lambda=config.gae_lambda,
         clipping_epsilon=config.clip,

@@ -21,6 +21,7 @@ from sgb.rl.networks import (
     draw_noise,
     forward,
     individuals,
+    tanh_gaussian_entropy,
     tanh_gaussian_log_prob,
 )
 from sgb.rl.normalizer import init_normalizer, normalize, update
@@ -259,3 +260,20 @@ def test_rl_and_layer_paths_draw_the_same_individual(prior):
         )
         layer_kl = sum(state["losses"][f"hidden_{j}"]["genome"]["kl"] for j in range(2))
         np.testing.assert_allclose(kl[i], layer_kl, rtol=1e-5)
+
+
+def test_tanh_entropy_estimate_is_the_mean_negative_log_density():
+    """E[tanh_gaussian_entropy] = E[-log p(tanh u)]; widening past the tanh range lowers it."""
+    loc, u_noise = jnp.array([[0.3, -1.0]]), jax.random.normal(jax.random.PRNGKey(0), (200_000, 2))
+
+    def both(scale):
+        scale = jnp.full((1, 2), scale)
+        u = loc + scale * u_noise
+        return (
+            float(jnp.mean(tanh_gaussian_entropy(scale, u))),
+            float(jnp.mean(-tanh_gaussian_log_prob(u, loc, scale))),
+        )
+
+    estimate, reference = both(0.5)
+    np.testing.assert_allclose(estimate, reference, atol=0.01)
+    assert both(5.0)[0] < both(1.0)[0]

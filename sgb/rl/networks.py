@@ -168,10 +168,20 @@ def action_distribution(logits: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
 def tanh_gaussian_log_prob(u: jnp.ndarray, loc: jnp.ndarray, scale: jnp.ndarray) -> jnp.ndarray:
     """log-density of the action tanh(u) where u ~ N(loc, scale^2), summed over the last axis."""
     log_normal = -0.5 * ((u - loc) / scale) ** 2 - jnp.log(scale) - 0.5 * jnp.log(2 * jnp.pi)
-    log_det = 2.0 * (jnp.log(2.0) - u - jax.nn.softplus(-2.0 * u))
-    return jnp.sum(log_normal - log_det, axis=-1)
+    return jnp.sum(log_normal - _log_det_tanh(u), axis=-1)
 
 
-def gaussian_entropy(scale: jnp.ndarray) -> jnp.ndarray:
-    """Entropy of the pre-tanh Gaussian, summed over the last axis (nats)."""
-    return jnp.sum(0.5 + 0.5 * jnp.log(2 * jnp.pi) + jnp.log(scale), axis=-1)
+def tanh_gaussian_entropy(scale: jnp.ndarray, u: jnp.ndarray) -> jnp.ndarray:
+    """One-draw estimate of the entropy of the action tanh(u), u ~ N(loc, scale^2), at a draw
+    ``u``, summed over the last axis (nats): the Gaussian's entropy plus log|d tanh(u)/du|.
+
+    The second term penalises saturating the tanh, so the entropy bonus cannot be bought
+    by widening the Gaussian beyond the action range.
+    """
+    gaussian = 0.5 + 0.5 * jnp.log(2 * jnp.pi) + jnp.log(scale)
+    return jnp.sum(gaussian + _log_det_tanh(u), axis=-1)
+
+
+def _log_det_tanh(u: jnp.ndarray) -> jnp.ndarray:
+    """log|d tanh(u)/du| = log(1 - tanh(u)^2), elementwise, computed stably."""
+    return 2.0 * (jnp.log(2.0) - u - jax.nn.softplus(-2.0 * u))

@@ -20,8 +20,10 @@ One training iteration:
    kept noise *under the current genome*: the PPO ratio
    pi_new(a|s) / pi_old(a|s) compares the same individual (same noise draw)
    before and after the genome update, as reparameterised sampling allows.
-   Loss = PPO clip loss + c1 value loss - c2 entropy + c3 (KL of actor and
-   critic genomes, averaged over the minibatch's individuals). Advantages by
+   Loss = PPO clip loss + c1 * 0.5 * squared value error - c2 entropy
+   + c3 (KL of actor and critic genomes, averaged over the minibatch's
+   individuals). The entropy is that of the squashed action tanh(u),
+   estimated at one reparameterised draw (as Brax's PPO does). Advantages by
    GAE, normalised over the valid steps.
 
 The vanilla network is the special case with no sampling and no KL.
@@ -48,8 +50,8 @@ from sgb.rl.networks import (
     action_distribution,
     apply,
     draw_noise,
-    gaussian_entropy,
     individuals,
+    tanh_gaussian_entropy,
     tanh_gaussian_log_prob,
 )
 from sgb.rl.normalizer import Normalizer, init_normalizer, normalize, update
@@ -214,7 +216,7 @@ def _masked_mean(x, mask):
     return jnp.sum(x * mask) / jnp.maximum(jnp.sum(mask), 1.0)
 
 
-def _loss(params: Params, data: Unroll, normalizer: Normalizer, config: PPOConfig):
+def _loss(params: Params, data: Unroll, normalizer: Normalizer, key: jax.Array, config: PPOConfig):
     _, actor, critic = _models(config)
     sgb = config.network.sgb
     a_layers, a_kl = individuals(actor, params.actor, data.actor_noise)
@@ -240,8 +242,9 @@ def _loss(params: Params, data: Unroll, normalizer: Normalizer, config: PPOConfi
     ratio = jnp.exp(log_prob - data.log_prob)
     clipped = jnp.clip(ratio, 1 - config.clip, 1 + config.clip)
     policy_loss = -_masked_mean(jnp.minimum(ratio * adv, clipped * adv), data.valid)
-    value_loss = _masked_mean((values[:, :-1] - target) ** 2, data.valid)
-    entropy = _masked_mean(gaussian_entropy(scale), data.valid)
+    value_loss = 0.5 * _masked_mean((values[:, :-1] - target) ** 2, data.valid)
+    u = loc + scale * jax.random.normal(key, loc.shape)  # reparameterised draw for the entropy
+    entropy = _masked_mean(tanh_gaussian_entropy(scale, u), data.valid)
     kl = jnp.mean(a_kl) + jnp.mean(c_kl)
     total = (
         policy_loss
@@ -357,16 +360,19 @@ def _sgd(ts: TrainState, data: Unroll, config: PPOConfig):
     key, k_perm = jax.random.split(ts.key)
     grad_fn = jax.value_and_grad(_loss, has_aux=True)
 
-    def minibatch(carry, idx):
+    def minibatch(carry, xs):
         params, opt_state = carry
+        idx, k = xs
         batch = jax.tree_util.tree_map(lambda x: x[idx], data)
-        (_, metrics), grads = grad_fn(params, batch, ts.normalizer, config)
+        (_, metrics), grads = grad_fn(params, batch, ts.normalizer, k, config)
         updates, opt_state = optimizer.update(grads, opt_state, params)
         return (optax.apply_updates(params, updates), opt_state), metrics
 
     def epoch(carry, k):
-        perm = jax.random.permutation(k, config.num_envs)
-        return jax.lax.scan(minibatch, carry, perm.reshape(config.num_minibatches, -1))
+        k_perm, k_entropy = jax.random.split(k)
+        perm = jax.random.permutation(k_perm, config.num_envs)
+        keys = jax.random.split(k_entropy, config.num_minibatches)
+        return jax.lax.scan(minibatch, carry, (perm.reshape(config.num_minibatches, -1), keys))
 
     carry = (ts.params, ts.opt_state)
     (params, opt_state), metrics = jax.lax.scan(
