@@ -10,13 +10,17 @@
    the same batch size.
 
 Usage: ``python benchmarks/bench_rl.py [--steps 2000000] [--seeds 0 1 2]
-[--out results/rl/bench_rl.json]``.
+[--out results/rl/bench_rl.json] [--max-runs N]``. Each finished run is kept in
+``--partial``; with ``--max-runs`` the benchmark runs in several sittings and the
+results file is written by the sitting that finishes it.
 """
 
 import argparse
 import functools
+import json
+import tempfile
 import time
-from dataclasses import replace
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import jax
@@ -24,7 +28,7 @@ import numpy as np
 from brax.training.agents.ppo import networks as brax_networks
 from brax.training.agents.ppo import train as brax_ppo
 
-from sgb.provenance import provenance, write_results
+from sgb.provenance import git_commit, provenance, write_results
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.population import population_returns
@@ -125,27 +129,54 @@ def _mean(runs: list[dict], key: str) -> float:
     return float(np.mean([run[key] for run in runs]))
 
 
+def _load(path: Path) -> dict:
+    return json.loads(path.read_text()) if path.exists() else {}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--steps", type=int, default=2_000_000)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument("--sgb-seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--out", type=Path, default=Path("results/rl/bench_rl.json"))
+    parser.add_argument(
+        "--partial",
+        type=Path,
+        default=Path(tempfile.gettempdir()) / "sgb_bench_rl.partial.json",
+        help="runs finished so far; a rerun resumes from them (same code and settings)",
+    )
+    parser.add_argument("--max-runs", type=int, default=None, help="stop after this many runs")
     args = parser.parse_args()
     config = PPOConfig(env=EnvSpec("ant", "spring"), total_steps=args.steps, num_evals=4)
     sgb_config = replace(config, network=NetworkConfig(cell_types=64))
-    start = time.perf_counter()
-    results = {"throughput": population_throughput()}
-    print(results["throughput"])
-    for name, run in (
-        ("ours", lambda seed: ours(config, seed)),
-        ("brax", lambda seed: brax_reference(config, seed)),
-        ("sgb_64_types", lambda seed: ours(sgb_config, seed)),
+    done = _load(args.partial)
+    if done and done.get("git_commit") != git_commit():
+        raise SystemExit(f"{args.partial} comes from another commit; delete it to start again")
+    done.setdefault("git_commit", git_commit())
+    plan = [("throughput", None, lambda _: population_throughput())]
+    plan += [("ours", seed, lambda seed: ours(config, seed)) for seed in args.seeds]
+    plan += [("brax", seed, lambda seed: brax_reference(config, seed)) for seed in args.seeds]
+    plan += [("sgb_64_types", seed, lambda seed: ours(sgb_config, seed)) for seed in args.sgb_seeds]
+    ran = 0
+    for name, seed, run in plan:
+        key = name if seed is None else f"{name}/{seed}"
+        if key in done:
+            continue
+        if args.max_runs is not None and ran >= args.max_runs:
+            print("stopped; rerun to resume from", args.partial)
+            return
+        start = time.perf_counter()
+        done[key] = {"seed": seed, **run(seed), "bench_wall_time_s": time.perf_counter() - start}
+        print(key, done[key])
+        args.partial.write_text(json.dumps(done))
+        ran += 1
+    results = {"throughput": done["throughput"], "sgb_network": asdict(sgb_config.network)}
+    for name, seeds in (
+        ("ours", args.seeds),
+        ("brax", args.seeds),
+        ("sgb_64_types", args.sgb_seeds),
     ):
-        results[name] = []
-        for seed in args.seeds:
-            results[name].append({"seed": seed, **run(seed)})
-            print(name, results[name][-1])
-    for name in ("ours", "brax", "sgb_64_types"):
+        results[name] = [done[f"{name}/{seed}"] for seed in seeds]
         results[f"{name}_mean_final_return"] = _mean(results[name], "final_return")
         results[f"{name}_mean_steps_per_s"] = _mean(results[name], "train_steps_per_s")
     results["return_ratio_ours_to_brax"] = (
@@ -158,7 +189,8 @@ def main() -> None:
         results["sgb_64_types_mean_steps_per_s"] / results["ours_mean_steps_per_s"]
     )
     print({k: v for k, v in results.items() if not isinstance(v, list | dict)})
-    record = provenance(config, "benchmark", args.seeds, time.perf_counter() - start)
+    wall = sum(run["bench_wall_time_s"] for key, run in done.items() if key != "git_commit")
+    record = provenance(config, "benchmark", args.seeds, wall)
     print("wrote", write_results(args.out, results, record))
 
 
