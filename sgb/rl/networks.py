@@ -146,6 +146,16 @@ def individuals(model: MLP, params: dict, noise: Noise | None) -> tuple[Phenotyp
     return jax.vmap(one)(noise)
 
 
+def drawn_individuals(
+    model: MLP, params: dict, keys: jax.Array | None, obs_size: int
+) -> tuple[Phenotype, jnp.ndarray]:
+    """``individuals`` of the keys (N, 2), one each; ``keys=None``: the mean network."""
+    if keys is None:
+        return individuals(model, params, None)
+    noise = jax.vmap(lambda k: draw_noise(model, params, k, obs_size))(keys)
+    return individuals(model, params, noise)
+
+
 def apply(layers: Phenotype, x: jnp.ndarray, batched: bool) -> jnp.ndarray:
     """Run phenotypes on ``x`` (N, ..., n_in): one per row if ``batched``, else one shared."""
     return jax.vmap(forward)(layers, x) if batched else forward(layers, x)

@@ -19,8 +19,7 @@ from sgb.rl.networks import (
     NetworkConfig,
     action_distribution,
     apply,
-    draw_noise,
-    individuals,
+    drawn_individuals,
 )
 from sgb.rl.normalizer import Normalizer, normalize
 
@@ -39,13 +38,8 @@ def _returns(
     or every row by the mean network when ``ind_keys`` is None."""
     env = make_env(spec)
     actor = MLP(network, 2 * env.action_size)
-    noise = (
-        None
-        if ind_keys is None
-        else jax.vmap(lambda k: draw_noise(actor, actor_params, k, env.observation_size))(ind_keys)
-    )
-    layers, _ = individuals(actor, actor_params, noise)
-    batched = noise is not None
+    layers, _ = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
+    batched = network.sgb and ind_keys is not None
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 
     def step(carry, _):
