@@ -1,18 +1,35 @@
 """Parameter counts and compression ratios, one definition for every model.
 
 compression ratio = parameters of the uncompressed network
-                    / parameters that define the compressed one.
-The uncompressed network counts weights and biases. The SGB counts its means,
-its rhos and its per-neuron biases; the DGB counts its g-net weights.
+                    / parameters that define the compressed one,
+
+under one of two conventions (``compression``):
+
+* ``"ours"``: every parameter that defines a network. The uncompressed network
+  counts weights and biases; the SGB its means, rhos and per-neuron biases; the
+  DGB its g-nets' parameters and the p-net's biases (stored directly).
+* ``"authors"`` (their code): weights only against the mean tables only (SGB)
+  or the g-nets only (DGB).
+
+A DGB g-net maps a synapse's (pre, post) neuron codes through two hidden ReLU
+layers, (width, ``GNET_SECOND_HIDDEN``), to one weight; input codes are binary
+(ceil(log2 n) bits), output codes one-hot.
 """
 
+import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, Literal
 
 import jax
 import numpy as np
 
 from sgb import validation
+
+ModelKind = Literal["sgb", "dgb", "dense"]
+MODEL_KINDS: tuple[str, ...] = ("sgb", "dgb", "dense")
+Convention = Literal["ours", "authors"]
+CONVENTIONS: tuple[str, ...] = ("ours", "authors")
+GNET_SECOND_HIDDEN = 10
 
 
 def _check_sizes(sizes: Sequence[int]) -> None:
@@ -20,14 +37,18 @@ def _check_sizes(sizes: Sequence[int]) -> None:
         raise ValueError(f"sizes needs at least an input and an output layer, got {sizes}")
 
 
+def weight_count(sizes: Sequence[int]) -> int:
+    """Weights (no biases) of a plain MLP with layer sizes e.g. (784, 800, 10)."""
+    _check_sizes(sizes)
+    return int(sum(a * b for a, b in zip(sizes[:-1], sizes[1:], strict=True)))
+
+
 def dense_param_count(sizes: Sequence[int]) -> int:
     """Weights and biases of a plain MLP with layer sizes e.g. (784, 800, 10)."""
-    _check_sizes(sizes)
-    return int(sum(a * b + b for a, b in zip(sizes[:-1], sizes[1:], strict=True)))
+    return weight_count(sizes) + int(sum(sizes[1:]))
 
 
-def sgb_param_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> int:
-    """Means, rhos and biases of an SGB MLP; ``cell_types`` as in ``SGBMLP``."""
+def _types(sizes: Sequence[int], cell_types: Sequence[int | None]) -> list[int]:
     _check_sizes(sizes)
     if len(validation.integers("cell_types", cell_types, allow_none=True)) != len(sizes):
         raise ValueError(f"cell_types {cell_types} must have one entry per layer of {sizes}")
@@ -35,7 +56,48 @@ def sgb_param_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> i
     for n, k in zip(sizes, types, strict=True):
         if not 0 < k <= n:
             raise ValueError(f"cell types must lie in [1, {n}] for a layer of {n}, got {k}")
-    return int(sum(2 * a * b + n for a, b, n in zip(types[:-1], types[1:], sizes[1:], strict=True)))
+    return types
+
+
+def sgb_table_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> int:
+    """Entries of an SGB MLP's mean tables (one per type pair and layer)."""
+    types = _types(sizes, cell_types)
+    return int(sum(a * b for a, b in zip(types[:-1], types[1:], strict=True)))
+
+
+def sgb_param_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> int:
+    """Means, rhos and biases of an SGB MLP; ``cell_types`` as in ``SGBMLP``."""
+    return 2 * sgb_table_count(sizes, cell_types) + int(sum(sizes[1:]))
+
+
+def code_dims(sizes: Sequence[int]) -> list[int]:
+    """Length of each neuron layer's DGB code: binary digits, one-hot at the output."""
+    _check_sizes(sizes)
+    return [max(1, math.ceil(math.log2(n))) for n in sizes[:-1]] + [int(sizes[-1])]
+
+
+def dgb_gnet_hidden(width: int) -> tuple[int, int]:
+    """Hidden widths of a g-net whose first hidden layer has ``width`` units."""
+    return (int(width), GNET_SECOND_HIDDEN)
+
+
+def gnet_param_count(code_dim: int, hidden: Sequence[int]) -> int:
+    """Parameters of one g-net with ``code_dim`` inputs, ``hidden`` layers and one output."""
+    validation.integers("gnet hidden widths", hidden)
+    return dense_param_count((code_dim, *hidden, 1))
+
+
+def dgb_gnet_count(sizes: Sequence[int], gnet_hidden: Sequence[int]) -> int:
+    """Parameters of all g-nets (one per dense layer) of a DGB MLP with layer ``sizes``."""
+    dims = code_dims(sizes)
+    return int(
+        sum(gnet_param_count(a + b, gnet_hidden) for a, b in zip(dims[:-1], dims[1:], strict=True))
+    )
+
+
+def dgb_param_count(sizes: Sequence[int], gnet_hidden: Sequence[int]) -> int:
+    """Genome size of a DGB MLP: all g-nets plus the p-net's biases."""
+    return dgb_gnet_count(sizes, gnet_hidden) + int(sum(sizes[1:]))
 
 
 def tree_param_count(params: Any) -> int:
@@ -48,6 +110,72 @@ def compression_ratio(uncompressed: int, compressed: int) -> float:
     return validation.integer("uncompressed", uncompressed) / validation.integer(
         "compressed", compressed
     )
+
+
+def genome_size(
+    kind: ModelKind,
+    sizes: Sequence[int],
+    setting: int,
+    in_types: int,
+    out_types: int,
+    convention: Convention = "ours",
+) -> int:
+    """Parameters counted for a model of the dense stack ``sizes`` under ``convention``.
+
+    ``setting``: cell types of every hidden layer (``"sgb"``) or the width of the
+    g-nets' first hidden layer (``"dgb"``); ignored for ``"dense"``.
+    """
+    if convention not in CONVENTIONS:
+        raise ValueError(f"convention must be one of {CONVENTIONS}, got {convention!r}")
+    ours = convention == "ours"
+    if kind == "sgb":
+        types = (in_types, *([setting] * (len(sizes) - 2)), out_types)
+        return sgb_param_count(sizes, types) if ours else sgb_table_count(sizes, types)
+    if kind == "dgb":
+        hidden = dgb_gnet_hidden(setting)
+        return dgb_param_count(sizes, hidden) if ours else dgb_gnet_count(sizes, hidden)
+    if kind == "dense":
+        return dense_param_count(sizes) if ours else weight_count(sizes)
+    raise ValueError(f"kind must be one of {MODEL_KINDS}, got {kind!r}")
+
+
+def compression(
+    kind: ModelKind,
+    sizes: Sequence[int],
+    setting: int,
+    in_types: int,
+    out_types: int,
+    convention: Convention = "ours",
+) -> float:
+    """Compression ratio of any model kind under ``convention`` ("ours" or "authors")."""
+    uncompressed = genome_size("dense", sizes, 0, in_types, out_types, convention)
+    return compression_ratio(
+        uncompressed, genome_size(kind, sizes, setting, in_types, out_types, convention)
+    )
+
+
+def setting_for_ratio(
+    kind: ModelKind,
+    sizes: Sequence[int],
+    ratio: float,
+    in_types: int,
+    out_types: int,
+    convention: Convention = "ours",
+) -> int:
+    """The setting (hidden cell types, or g-net width) whose compression is nearest ``ratio``
+    on a log scale. SGB types range over 1..min(hidden); g-net widths over 1..4096."""
+    if ratio <= 0:
+        raise ValueError(f"ratio must be positive, got {ratio}")
+    if kind == "sgb":
+        candidates = np.arange(1, min(sizes[1:-1]) + 1)
+    elif kind == "dgb":
+        candidates = np.arange(1, 4097)
+    else:
+        raise ValueError(f"kind must be 'sgb' or 'dgb', got {kind!r}")
+    ratios = np.array(
+        [compression(kind, sizes, int(c), in_types, out_types, convention) for c in candidates]
+    )
+    return int(candidates[np.argmin(np.abs(np.log(ratios) - np.log(ratio)))])
 
 
 def hidden_types_sweep(

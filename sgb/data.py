@@ -1,6 +1,9 @@
 """Datasets as arrays.
 
 Offline: ``digits`` (scikit-learn) and ``mnist1d`` (generated in code).
+``fashion-mnist``: read from Debian's ``dataset-fashion-mnist`` package
+(``/usr/share/datasets/fashion-mnist``) or the cache, else downloaded; its files are
+checked by the MD5 of their decompressed bytes (Debian re-compressed them).
 Downloaded once and cached: ``mnist`` and ``cifar10``. Files are stored under
 ``$SGB_DATA_DIR`` (default ``~/.cache/sgb``) and checked against their MD5
 checksums every time they are used; a missing, partial or corrupt file is
@@ -53,6 +56,39 @@ MNIST_FILES = {
         ("train_labels", "train-labels-idx1-ubyte.gz", "d53e105ee54ea40749a09fcbcd1e9432"),
         ("test_images", "t10k-images-idx3-ubyte.gz", "9fb629c4189551a2d022fa330f9573f3"),
         ("test_labels", "t10k-labels-idx1-ubyte.gz", "ec29112dd5afa0611ce80d1b7f02629c"),
+    )
+}
+# Fashion-MNIST (Xiao, Rasul and Vollgraf, 2017): the official archive's .gz MD5s, and the
+# MD5s of the decompressed IDX bytes, which any copy (official or Debian's) must match.
+_FASHION_URL = "http://fashion-mnist.s3-website.eu-central-1.amazonaws.com/"
+FASHION_MNIST_SYSTEM_DIR = Path("/usr/share/datasets/fashion-mnist")
+FASHION_MNIST_FILES = {
+    split: (RemoteFile(name, (_FASHION_URL + name,), gz_md5), raw_md5)
+    for split, name, gz_md5, raw_md5 in (
+        (
+            "train_images",
+            "train-images-idx3-ubyte.gz",
+            "8d4fb7e6c68d591d4c3dfef9ec88bf0d",
+            "f4a8712d7a061bf5bd6d2ca38dc4d50a",
+        ),
+        (
+            "train_labels",
+            "train-labels-idx1-ubyte.gz",
+            "25c81989df183df01b3e8a0aad5dffbe",
+            "9018921c3c673c538a1fc5bad174d6f9",
+        ),
+        (
+            "test_images",
+            "t10k-images-idx3-ubyte.gz",
+            "bef4ecab320f06d8554ea6380940ec79",
+            "8181f5470baa50b63fa0f6fddb340f0a",
+        ),
+        (
+            "test_labels",
+            "t10k-labels-idx1-ubyte.gz",
+            "bb300cfdad3c16e7a12a480ee83cd310",
+            "15d484375f8d13e6eb1aabb0c3f46965",
+        ),
     )
 }
 CIFAR10_FILE = RemoteFile(
@@ -132,6 +168,23 @@ def _read_idx_gz(path: Path) -> np.ndarray:
         return parse_idx(f.read())
 
 
+def _verified_idx(remote: RemoteFile, raw_md5: str, directories: list[Path]) -> np.ndarray:
+    """The IDX array of the first copy of ``remote`` in ``directories`` whose decompressed
+    bytes have MD5 ``raw_md5``; failing all, a download into the cache (``fetch``)."""
+    for directory in directories:
+        path = directory / remote.name
+        if path.exists():
+            with gzip.open(path, "rb") as f:
+                raw = f.read()
+            if hashlib.md5(raw).hexdigest() == raw_md5:
+                return parse_idx(raw)
+    with gzip.open(fetch(remote, directories[-1]), "rb") as f:
+        raw = f.read()
+    if hashlib.md5(raw).hexdigest() != raw_md5:
+        raise RuntimeError(f"{remote.name}: decompressed contents fail their MD5 check")
+    return parse_idx(raw)
+
+
 def parse_cifar10_tar(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(x_train, y_train, x_test, y_test) from CIFAR-10's python tarball; x uint8 NHWC."""
 
@@ -173,17 +226,32 @@ def mnist(seed: int = 0, directory: Path | None = None) -> Dataset:
     """
     del seed
     arrays = {split: _read_idx_gz(fetch(f, directory)) for split, f in MNIST_FILES.items()}
+    return _idx_dataset("mnist", arrays)
+
+
+def _idx_dataset(name: str, arrays: dict[str, np.ndarray]) -> Dataset:
+    """28x28 IDX images flattened to 784 features and standardised globally; int32 labels."""
     x_tr = arrays["train_images"].reshape(len(arrays["train_images"]), -1).astype(np.float32)
     x_te = arrays["test_images"].reshape(len(arrays["test_images"]), -1).astype(np.float32)
     x_tr, x_te = _standardise(x_tr, x_te, axis=None)
-    return Dataset(
-        "mnist",
-        x_tr,
-        arrays["train_labels"].astype(np.int32),
-        x_te,
-        arrays["test_labels"].astype(np.int32),
-        10,
-    )
+    y_tr, y_te = arrays["train_labels"].astype(np.int32), arrays["test_labels"].astype(np.int32)
+    return Dataset(name, x_tr, y_tr, x_te, y_te, 10)
+
+
+def fashion_mnist(seed: int = 0, directory: Path | None = None) -> Dataset:
+    """Fashion-MNIST, 60k/10k 28x28 clothing images flattened to 784 features, standardised
+    globally. Looks in ``FASHION_MNIST_SYSTEM_DIR`` (Debian's package), then in ``directory``
+    (default: the cache), then downloads; every copy is checked by its decompressed MD5.
+
+    ``seed`` is unused (the split is fixed); it keeps the loaders' signatures alike.
+    """
+    del seed
+    directories = [FASHION_MNIST_SYSTEM_DIR, data_dir() if directory is None else Path(directory)]
+    arrays = {
+        split: _verified_idx(remote, raw_md5, directories)
+        for split, (remote, raw_md5) in FASHION_MNIST_FILES.items()
+    }
+    return _idx_dataset("fashion-mnist", arrays)
 
 
 def cifar10(seed: int = 0, directory: Path | None = None) -> Dataset:
@@ -235,12 +303,14 @@ OFFLINE_DATASETS: dict[str, Callable[..., Dataset]] = {"digits": digits, "mnist1
 DATASETS: dict[str, Callable[..., Dataset]] = {
     **OFFLINE_DATASETS,
     "mnist": mnist,
+    "fashion-mnist": fashion_mnist,
     "cifar10": cifar10,
 }
 
 
 def load(name: str, seed: int = 0) -> Dataset:
-    """Load a dataset by name: digits, mnist1d (offline), mnist, cifar10 (downloaded once)."""
+    """Load a dataset by name: digits, mnist1d (offline), fashion-mnist (Debian package or
+    downloaded once), mnist, cifar10 (downloaded once)."""
     if name not in DATASETS:
         raise ValueError(f"unknown dataset {name!r}; available: {sorted(DATASETS)}")
     return DATASETS[name](seed=seed)

@@ -1,30 +1,43 @@
-"""Deterministic genomic bottleneck (DGB, after Koulakov et al., 2021).
+"""Deterministic genomic bottleneck (DGB, after Koulakov et al., 2021), trained as its
+authors train it.
 
-Every neuron of the phenotypic network (p-net) carries a fixed code: the
-binary digits of its index, as +-1 (``binary_codes``), or a one-hot vector
-for the output layer. For each dense layer a small genomic network (g-net)
-maps the concatenated (pre code, post code) of a synapse to its weight, so a
-g-net with P parameters defines all n_pre x n_post weights of its layer.
+Every neuron of the phenotypic network (p-net) carries a fixed code: the binary
+digits of its index, as +-1 (``binary_codes``), or a one-hot vector for the output
+layer. For each dense layer a genomic network (g-net) maps the concatenated
+(pre code, post code) of a synapse through two hidden ReLU layers (width, 10) to its
+weight, so a g-net of P parameters defines all n_pre x n_post weights of its layer.
 
-Training (in ``sgb.supervised.train_dgb``) alternates: train the p-net for a
-number of minibatches, fit the g-nets to the p-net's kernels (mean squared
-error, ``fit_gnets``), write the g-nets' kernels back into the p-net
-(``generate_kernels``). The innate network is the one the g-nets generate.
+``train_dgb`` alternates for ``rounds`` rounds: ``pnet_steps`` Adam minibatches
+of the p-net on cross-entropy, ``gnet_steps`` Adam steps fitting the g-nets to
+the p-net's kernels (mean squared error on ``gnet_batch`` random synapses per
+layer), then writing the generated kernels back into the p-net. After every
+write-back the generated network is scored on a validation set drawn from the
+training images (as the authors do); the best one is the innate network.
+The whole training state is one ``DGBState``, passed and returned.
 
-The genome is the g-nets' parameters plus the p-net's biases (stored
-directly, as the SGB stores its biases); ``dgb_param_count`` counts them.
+The genome is the g-nets' parameters plus the p-net's biases (stored directly);
+``sgb.compression.dgb_param_count`` counts them.
 """
 
+import dataclasses
 from collections.abc import Sequence
+from functools import partial
 from typing import Any
 
-import flax.linen as nn
+import flax
 import jax
 import jax.numpy as jnp
 import numpy as np
 import optax
+from flax.training.train_state import TrainState
 
-from sgb.compression import dense_param_count
+from sgb import validation
+from sgb.classifiers import DenseClassifier, dense_sizes, with_kernels
+from sgb.compression import code_dims, dgb_gnet_hidden
+from sgb.data import Dataset
+from sgb.training import accuracy, cross_entropy_step, train_loop
+
+GNetParams = list[tuple[jnp.ndarray, jnp.ndarray]]
 
 
 def binary_codes(n: int) -> np.ndarray:
@@ -40,134 +53,250 @@ def layer_codes(sizes: Sequence[int]) -> list[np.ndarray]:
     """Codes of every neuron layer of an MLP with ``sizes``: binary, one-hot for the output."""
     if len(sizes) < 2:
         raise ValueError(f"sizes needs at least an input and an output layer, got {sizes}")
-    return [binary_codes(n) for n in sizes[:-1]] + [np.eye(sizes[-1], dtype=np.float32)]
+    codes = [binary_codes(n) for n in sizes[:-1]] + [np.eye(sizes[-1], dtype=np.float32)]
+    assert [c.shape[1] for c in codes] == code_dims(sizes)
+    return codes
 
 
-def pair_inputs(pre: np.ndarray, post: np.ndarray) -> np.ndarray:
-    """G-net inputs of every synapse, shape (n_pre * n_post, bits_pre + bits_post), row-major
-    in (pre, post) so that a reshape to (n_pre, n_post) gives the kernel."""
-    n_pre, n_post = len(pre), len(post)
-    return np.concatenate(
-        [np.repeat(pre, n_post, axis=0), np.tile(post, (n_pre, 1))], axis=1
-    ).astype(np.float32)
+def init_gnet(key: jax.Array, code_dim: int, hidden: Sequence[int]) -> GNetParams:
+    """(kernel, bias) of each layer of a g-net code_dim -> *hidden -> 1, He-initialised."""
+    widths = (code_dim, *hidden, 1)
+    keys = jax.random.split(key, len(widths) - 1)
+    return [
+        (jax.random.normal(k, (a, b)) * jnp.sqrt(2.0 / a), jnp.zeros(b))
+        for k, a, b in zip(keys, widths[:-1], widths[1:], strict=True)
+    ]
 
 
-class GNet(nn.Module):
-    """MLP from a synapse's (pre, post) code to its weight (before scaling): (..., d) -> (...)."""
-
-    hidden: Sequence[int]
-
-    @nn.compact
-    def __call__(self, codes: jnp.ndarray) -> jnp.ndarray:
-        x = codes
-        for width in self.hidden:
-            x = nn.relu(nn.Dense(width)(x))
-        return nn.Dense(1)(x)[..., 0]
+def _gnet_tail(layers: GNetParams, h: jnp.ndarray) -> jnp.ndarray:
+    """The g-net after its first layer's pre-activation ``h`` (..., width) -> (...)."""
+    h = jax.nn.relu(h)
+    for kernel, bias in layers[1:-1]:
+        h = jax.nn.relu(h @ kernel + bias)
+    kernel, bias = layers[-1]
+    return (h @ kernel + bias)[..., 0]
 
 
-def gnet_param_count(code_dim: int, hidden: Sequence[int]) -> int:
-    """Parameters of one ``GNet`` with ``code_dim`` inputs."""
-    if any(int(h) != h or h <= 0 for h in hidden):
-        raise ValueError(f"gnet hidden widths must be positive integers, got {hidden}")
-    return dense_param_count((code_dim, *hidden, 1))
+def generate_kernel(layers: GNetParams, pre: jnp.ndarray, post: jnp.ndarray) -> jnp.ndarray:
+    """The (n_pre, n_post) kernel a g-net encodes, scaled by 1/sqrt(n_pre).
+
+    The first layer is split into its pre and post halves, so each synapse's
+    first pre-activation is a sum of two per-neuron terms; rows are generated in
+    chunks to bound memory.
+    """
+    kernel, bias = layers[0]
+    a = pre @ kernel[: pre.shape[1]]  # (n_pre, width)
+    b = post @ kernel[pre.shape[1] :] + bias  # (n_post, width)
+    rows = jax.lax.map(lambda row: _gnet_tail(layers, row + b), a, batch_size=16)
+    return rows / jnp.sqrt(pre.shape[0])
 
 
-def dgb_param_count(sizes: Sequence[int], gnet_hidden: Sequence[int]) -> int:
-    """Genome size of a DGB MLP with layer ``sizes``: all g-nets plus the p-net's biases."""
-    codes = layer_codes(sizes)
-    gnets = sum(
-        gnet_param_count(a.shape[1] + b.shape[1], gnet_hidden)
-        for a, b in zip(codes[:-1], codes[1:], strict=True)
-    )
-    return int(gnets + sum(sizes[1:]))
+def fit_loss(
+    layers: GNetParams,
+    pre: jnp.ndarray,
+    post: jnp.ndarray,
+    kernel: jnp.ndarray,
+    key: jax.Array,
+    batch: int,
+) -> jnp.ndarray:
+    """Mean squared error, on ``batch`` random synapses, between the g-net's outputs and
+    the kernel times sqrt(n_pre) (dimensionless)."""
+    i_key, j_key = jax.random.split(key)
+    i = jax.random.randint(i_key, (batch,), 0, pre.shape[0])
+    j = jax.random.randint(j_key, (batch,), 0, post.shape[0])
+    first, bias = layers[0]
+    h = pre[i] @ first[: pre.shape[1]] + post[j] @ first[pre.shape[1] :] + bias
+    target = kernel[i, j] * jnp.sqrt(pre.shape[0])
+    return jnp.mean((_gnet_tail(layers, h) - target) ** 2)
 
 
-class Genome:
-    """The g-nets of an MLP with layer ``sizes`` (one per dense layer) and their inputs.
+@dataclasses.dataclass(frozen=True)
+class DGBConfig:
+    """A DGB classifier and its training (defaults: the authors', ``rounds`` aside).
 
-    Kernels are generated as ``gnet(codes) / sqrt(n_pre)`` so that the g-nets'
-    targets are of order one whatever the fan-in.
+    ``hidden``: p-net hidden widths; ``gnet_width``: first hidden layer of every g-net
+    (the second has 10 units). Per round: ``pnet_steps`` minibatches of ``batch_size``,
+    then ``gnet_steps`` g-net Adam steps on ``gnet_batch`` synapses per layer.
+    ``validation_size`` training images score each write-back.
     """
 
-    def __init__(self, sizes: Sequence[int], gnet_hidden: Sequence[int]):
-        codes = layer_codes(sizes)
-        self.sizes = tuple(int(s) for s in sizes)
-        self.gnet = GNet(tuple(gnet_hidden))
-        self.inputs = [
-            jnp.asarray(pair_inputs(a, b)) for a, b in zip(codes[:-1], codes[1:], strict=True)
+    hidden: tuple[int, ...] = (800,)
+    gnet_width: int = 50
+    rounds: int = 100
+    pnet_steps: int = 100
+    batch_size: int = 100
+    learning_rate: float = 1e-3
+    gnet_steps: int = 600
+    gnet_batch: int = 1000
+    gnet_learning_rate: float = 1e-3
+    validation_size: int = 10_000
+    seed: int = 0
+    conv_features: tuple[int, ...] = ()
+
+    def __post_init__(self) -> None:
+        validation.integers("hidden", self.hidden)
+        for name in (
+            "gnet_width",
+            "rounds",
+            "pnet_steps",
+            "batch_size",
+            "gnet_steps",
+            "gnet_batch",
+            "validation_size",
+        ):
+            validation.integer(name, getattr(self, name))
+        validation.positive("learning_rate", self.learning_rate)
+        validation.positive("gnet_learning_rate", self.gnet_learning_rate)
+        validation.integer("seed", self.seed, minimum=0)
+        if self.conv_features:
+            validation.integers("conv_features", self.conv_features)
+
+
+@flax.struct.dataclass
+class DGBState:
+    """Everything a DGB's training carries from step to step.
+
+    ``pnet``: the p-net and its optimizer; ``gnets``/``gnet_opt``: every layer's
+    g-net and its optimizer; ``best_params``/``best_gnets``/``best_accuracy``: the
+    generated network with the highest validation accuracy so far; ``fit_mse``: the
+    last fit's error; ``rounds``: write-backs done; ``key``: for synapse sampling.
+    """
+
+    pnet: TrainState
+    gnets: list[GNetParams]
+    gnet_opt: Any
+    best_params: Any
+    best_gnets: list[GNetParams]
+    best_accuracy: jnp.ndarray
+    fit_mse: jnp.ndarray
+    rounds: jnp.ndarray
+    key: jax.Array
+
+
+class DGB:
+    """The codes, optimizers and jitted functions of a DGB for one config and data shape."""
+
+    def __init__(self, config: DGBConfig, input_shape: Sequence[int], num_classes: int):
+        self.config = config
+        self.sizes = dense_sizes(input_shape, config.conv_features, config.hidden, num_classes)
+        self.codes = [jnp.asarray(c) for c in layer_codes(self.sizes)]
+        self.model = DenseClassifier((*config.hidden, num_classes), config.conv_features)
+        self.gnet_tx = optax.adam(config.gnet_learning_rate)
+
+    def init(self, x: np.ndarray) -> DGBState:
+        """Initial state: a random p-net overwritten by fresh g-nets' kernels."""
+        pnet_key, gnet_key, key = jax.random.split(jax.random.key(self.config.seed), 3)
+        params = self.model.init(pnet_key, x[:1])
+        pnet = TrainState.create(
+            apply_fn=self.model.apply, params=params, tx=optax.adam(self.config.learning_rate)
+        )
+        hidden = dgb_gnet_hidden(self.config.gnet_width)
+        keys = jax.random.split(gnet_key, len(self.codes) - 1)
+        gnets = [
+            init_gnet(k, a.shape[1] + b.shape[1], hidden)
+            for k, a, b in zip(keys, self.codes[:-1], self.codes[1:], strict=True)
         ]
-        self.scales = [float(n) ** -0.5 for n in self.sizes[:-1]]
+        pnet = pnet.replace(params=with_kernels(params, self.generate(gnets)))
+        copy = partial(jax.tree_util.tree_map, jnp.copy)  # own buffers, so steps can donate
+        return DGBState(
+            pnet=pnet,
+            gnets=gnets,
+            gnet_opt=self.gnet_tx.init(gnets),
+            best_params=copy(pnet.params),
+            best_gnets=copy(gnets),
+            best_accuracy=jnp.asarray(-1.0),
+            fit_mse=jnp.asarray(jnp.nan),
+            rounds=jnp.asarray(0),
+            key=key,
+        )
 
-    def init(self, key: jax.Array) -> list[Any]:
-        """Parameters of every layer's g-net."""
-        keys = jax.random.split(key, len(self.inputs))
-        return [self.gnet.init(k, x[:1]) for k, x in zip(keys, self.inputs, strict=True)]
-
-    def generate_kernels(self, gnet_params: list[Any]) -> list[jnp.ndarray]:
-        """The kernels (n_pre, n_post) of every layer that the g-nets encode."""
+    def generate(self, gnets: list[GNetParams]) -> list[jnp.ndarray]:
+        """Every layer's kernel as the g-nets encode it."""
         return [
-            (self.gnet.apply(p, x) * s).reshape(a, b)
-            for p, x, s, a, b in zip(
-                gnet_params, self.inputs, self.scales, self.sizes[:-1], self.sizes[1:], strict=True
+            generate_kernel(g, a, b)
+            for g, a, b in zip(gnets, self.codes[:-1], self.codes[1:], strict=True)
+        ]
+
+    def _fit_loss(self, gnets, kernels, key) -> jnp.ndarray:
+        keys = jax.random.split(key, len(gnets))
+        losses = [
+            fit_loss(g, a, b, k, layer_key, self.config.gnet_batch)
+            for g, a, b, k, layer_key in zip(
+                gnets, self.codes[:-1], self.codes[1:], kernels, keys, strict=True
             )
         ]
+        return sum(losses) / len(losses)
 
-    def fit_loss(
-        self, gnet_params: list[Any], kernels: list[jnp.ndarray], key: jax.Array, batch: int
-    ) -> jnp.ndarray:
-        """Mean over layers of the mean squared error of kernels times sqrt(fan-in)
-        (dimensionless), on ``batch`` synapses per layer drawn with ``key`` (all if fewer)."""
-        errors = []
-        for p, x, s, k, layer_key in zip(
-            gnet_params,
-            self.inputs,
-            self.scales,
-            kernels,
-            jax.random.split(key, len(kernels)),
-            strict=True,
-        ):
-            target = k.reshape(-1) / s
-            if batch < len(x):
-                idx = jax.random.randint(layer_key, (batch,), 0, len(x))
-                x, target = x[idx], target[idx]
-            errors.append(jnp.mean((self.gnet.apply(p, x) - target) ** 2))
-        return sum(errors) / len(errors)
+    def write_back(self, state: DGBState, x_val: jnp.ndarray, y_val: jnp.ndarray) -> DGBState:
+        """Fit the g-nets to the p-net's kernels, write their kernels back, keep the best."""
+        kernels = [
+            state.pnet.params["params"][f"dense_{i}"]["kernel"] for i in range(len(self.codes) - 1)
+        ]
+        key, fit_key = jax.random.split(state.key)
 
-
-def make_fit(genome: Genome, optimizer: optax.GradientTransformation, steps: int, batch: int):
-    """A jitted ``fit(gnet_params, opt_state, kernels, key) -> (gnet_params, opt_state, loss)``
-    taking ``steps`` optimizer steps on ``genome.fit_loss`` with ``batch`` synapses per layer."""
-    if steps < 1 or batch < 1:
-        raise ValueError(f"steps and batch must be >= 1, got {steps}, {batch}")
-
-    @jax.jit
-    def fit(gnet_params, opt_state, kernels, key):
         def step(carry, step_key):
-            params, state = carry
-            loss, grads = jax.value_and_grad(genome.fit_loss)(params, kernels, step_key, batch)
-            updates, state = optimizer.update(grads, state, params)
-            return (optax.apply_updates(params, updates), state), loss
+            gnets, opt = carry
+            loss, grads = jax.value_and_grad(self._fit_loss)(gnets, kernels, step_key)
+            updates, opt = self.gnet_tx.update(grads, opt, gnets)
+            return (optax.apply_updates(gnets, updates), opt), loss
 
-        (gnet_params, opt_state), losses = jax.lax.scan(
-            step, (gnet_params, opt_state), jax.random.split(key, steps)
+        (gnets, opt), losses = jax.lax.scan(
+            step,
+            (state.gnets, state.gnet_opt),
+            jax.random.split(fit_key, self.config.gnet_steps),
         )
-        return gnet_params, opt_state, losses[-1]
+        params = with_kernels(state.pnet.params, self.generate(gnets))
+        score = accuracy(self.model.apply(params, x_val), y_val)
+        better = score > state.best_accuracy
 
-    return fit
+        def pick(new, old):
+            return jax.tree_util.tree_map(lambda a, b: jnp.where(better, a, b), new, old)
+
+        return state.replace(
+            pnet=state.pnet.replace(params=params),
+            gnets=gnets,
+            gnet_opt=opt,
+            best_params=pick(params, state.best_params),
+            best_gnets=pick(gnets, state.best_gnets),
+            best_accuracy=jnp.maximum(score, state.best_accuracy),
+            fit_mse=losses[-1],
+            rounds=state.rounds + 1,
+            key=key,
+        )
 
 
-def fit_gnets(
-    genome: Genome,
-    kernels: list[jnp.ndarray],
-    key: jax.Array,
-    steps: int = 500,
-    learning_rate: float = 1e-2,
-    batch: int = 4096,
-) -> tuple[list[Any], float]:
-    """Fit fresh g-nets to given kernels with Adam; returns (g-net params, final loss)."""
-    init_key, fit_key = jax.random.split(key)
-    optimizer = optax.adam(learning_rate)
-    params = genome.init(init_key)
-    fit = make_fit(genome, optimizer, steps, batch)
-    params, _, loss = fit(params, optimizer.init(params), kernels, fit_key)
-    return params, float(loss)
+def pnet_step(state: DGBState, x, y, key) -> tuple[DGBState, dict]:
+    """One p-net minibatch step on cross-entropy (the baseline's step)."""
+    pnet, metrics = cross_entropy_step(state.pnet, x, y, key)
+    return state.replace(pnet=pnet), metrics
+
+
+def train_dgb(
+    config: DGBConfig, data: Dataset, progress: bool = True
+) -> tuple[DGB, DGBState, list[dict[str, float]]]:
+    """Train a DGB on ``data``; returns (the DGB, its final state, per-epoch history).
+
+    ``state.best_params`` is the innate network (its kernels generated by
+    ``state.best_gnets``), chosen on ``config.validation_size`` training images.
+    """
+    dgb = DGB(config, data.x_train.shape[1:], data.num_classes)
+    n_val = min(config.validation_size, len(data.x_train))
+    pick = np.random.default_rng(config.seed + 1).choice(len(data.x_train), n_val, replace=False)
+    x_val, y_val = jnp.asarray(data.x_train[pick]), jnp.asarray(data.y_train[pick])
+    # the state is donated: its buffers (the best network among them) are reused, not copied
+    write_back = jax.jit(lambda state: dgb.write_back(state, x_val, y_val), donate_argnums=0)
+    state, history = train_loop(
+        dgb.init(data.x_train),
+        jax.jit(pnet_step, donate_argnums=0),
+        data.x_train,
+        data.y_train,
+        batch_size=config.batch_size,
+        num_steps=config.rounds * config.pnet_steps,
+        seed=config.seed,
+        hook=write_back,
+        hook_every=config.pnet_steps,
+        params_of=lambda state: state.pnet.params,
+        progress=progress,
+        desc="DGB training",
+    )
+    return dgb, state, history

@@ -1,4 +1,11 @@
-"""A generic minibatch loop that trains an SGB model's genome on the negative ELBO with Adam."""
+"""The one minibatch training loop, used by the SGB, the DGB and the uncompressed network,
+and the steps it runs.
+
+``train_loop`` draws shuffled minibatches (a fresh permutation each epoch, the last
+partial batch dropped), runs ``step(state, x, y, key) -> (state, metrics)`` on each
+and, every ``hook_every`` steps, ``hook(state) -> state`` (the DGB's write-backs).
+It returns the state and one record per epoch of the metrics' means.
+"""
 
 from collections.abc import Callable
 from typing import Any
@@ -11,11 +18,76 @@ import optax
 from flax.training.train_state import TrainState
 from tqdm.auto import tqdm
 
-from sgb import validation
 from sgb.divergence import check_loss, check_params
-from sgb.elbo import elbo_loss
+from sgb.elbo import cross_entropy, elbo_loss
 
 DataLoss = Callable[[jnp.ndarray, jnp.ndarray], jnp.ndarray]
+Step = Callable[[Any, jnp.ndarray, jnp.ndarray, jax.Array], tuple[Any, dict]]
+
+
+def train_loop(
+    state: Any,
+    step: Step,
+    x: np.ndarray,
+    y: np.ndarray,
+    *,
+    batch_size: int,
+    num_steps: int,
+    seed: int,
+    hook: Callable[[Any], Any] | None = None,
+    hook_every: int = 0,
+    params_of: Callable[[Any], Any] = lambda state: state.params,
+    progress: bool = True,
+    desc: str = "training",
+) -> tuple[Any, list[dict[str, float]]]:
+    """Run ``num_steps`` minibatch steps of ``batch_size`` examples of (x, y).
+
+    Returns the final state and per-epoch records ``{"epoch", **mean metrics}``
+    (the last one over a partial epoch if ``num_steps`` is not a whole number of epochs).
+    Raises ``sgb.divergence.TrainingDiverged`` at the first step whose ``metrics["loss"]``
+    is not finite, or if the final ``params_of(state)`` holds a non-finite value.
+    """
+    if num_steps < 1 or batch_size < 1:
+        raise ValueError(f"num_steps and batch_size must be >= 1, got {num_steps}, {batch_size}")
+    if hook is not None and hook_every < 1:
+        raise ValueError(f"hook_every must be >= 1 with a hook, got {hook_every}")
+    rng = np.random.default_rng(seed)
+    key = jax.random.key(seed)
+    n_batches = max(1, len(x) // batch_size)
+    history: list[dict[str, float]] = []
+    sums: dict[str, Any] = {}
+    count = 0
+    order = rng.permutation(len(x))
+    for t in tqdm(range(num_steps), desc=desc, disable=not progress):
+        b = t % n_batches
+        if b == 0 and t > 0:
+            order = rng.permutation(len(x))
+        idx = order[b * batch_size : (b + 1) * batch_size]
+        key, step_key = jax.random.split(key)
+        state, metrics = step(state, x[idx], y[idx], step_key)
+        check_loss(float(metrics["loss"]), t + 1)
+        sums = {k: sums.get(k, 0.0) + v for k, v in metrics.items()}
+        count += 1
+        if hook is not None and (t + 1) % hook_every == 0:
+            state = hook(state)
+        if b == n_batches - 1 or t == num_steps - 1:
+            means = {k: float(v) / count for k, v in sums.items()}
+            history.append({"epoch": (t + 1) / n_batches, **means})
+            sums, count = {}, 0
+    check_params(params_of(state), num_steps)
+    return state, history
+
+
+def accuracy(logits: jnp.ndarray, labels: jnp.ndarray) -> jnp.ndarray:
+    """Fraction of examples whose largest logit is the label."""
+    return jnp.mean(jnp.argmax(logits, -1) == labels)
+
+
+def cross_entropy_step(state: TrainState, x, y, key) -> tuple[TrainState, dict]:
+    """One Adam step of a deterministic classifier on cross-entropy (``key`` unused)."""
+    del key
+    loss, grads = jax.value_and_grad(lambda p: cross_entropy(state.apply_fn(p, x), y))(state.params)
+    return state.apply_gradients(grads=grads), {"loss": loss}
 
 
 def fit_elbo(
@@ -34,22 +106,18 @@ def fit_elbo(
     local_reparam: bool = False,
     progress: bool = True,
 ) -> tuple[Any, list[dict[str, float]]]:
-    """Train ``params`` on (x, y) for ``epochs`` passes of shuffled minibatches.
+    """Train an SGB model's ``params`` on the negative ELBO with Adam for ``epochs`` passes.
 
     Returns the trained params and one dict per epoch with the mean ``loss``,
     ``data`` and ``kl`` terms over its minibatches. ``local_reparam`` selects the
-    gradient estimator of ``sgb.elbo.elbo_loss``. Raises ``sgb.divergence.TrainingDiverged``
-    at the first step whose loss is not finite.
+    gradient estimator of ``sgb.elbo.elbo_loss``.
     """
-    validation.integer("epochs", epochs)
-    validation.integer("batch_size", batch_size)
-    validation.integer("num_samples", num_samples)
-    validation.positive("learning_rate", learning_rate)
-    validation.non_negative("kl_weight", kl_weight)
+    if epochs < 1:
+        raise ValueError(f"epochs must be >= 1, got {epochs}")
     state = TrainState.create(apply_fn=model.apply, params=params, tx=optax.adam(learning_rate))
 
     @jax.jit
-    def train_step(state: TrainState, xb, yb, key):
+    def elbo_step(state: TrainState, xb, yb, key):
         def loss_fn(p):
             return elbo_loss(
                 model,
@@ -66,20 +134,15 @@ def fit_elbo(
         (loss, parts), grads = jax.value_and_grad(loss_fn, has_aux=True)(state.params)
         return state.apply_gradients(grads=grads), {"loss": loss, **parts}
 
-    rng = np.random.default_rng(seed)
-    key = jax.random.key(seed)
-    n_batches = max(1, len(x) // batch_size)
-    history = []
-    for epoch in tqdm(range(epochs), desc="training", disable=not progress):
-        order = rng.permutation(len(x))
-        sums: dict[str, float] = {}
-        for b in range(n_batches):
-            idx = order[b * batch_size : (b + 1) * batch_size]
-            key, step_key = jax.random.split(key)
-            state, metrics = train_step(state, x[idx], y[idx], step_key)
-            check_loss(float(metrics["loss"]), epoch * n_batches + b + 1)
-            for name, value in metrics.items():
-                sums[name] = sums.get(name, 0.0) + float(value)
-        history.append({"epoch": epoch + 1, **{k: v / n_batches for k, v in sums.items()}})
-    check_params(state.params, epochs * n_batches)
+    steps = epochs * max(1, len(x) // batch_size)
+    state, history = train_loop(
+        state,
+        elbo_step,
+        x,
+        y,
+        batch_size=batch_size,
+        num_steps=steps,
+        seed=seed,
+        progress=progress,
+    )
     return state.params, history

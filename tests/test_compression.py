@@ -1,11 +1,14 @@
 import jax
 import jax.numpy as jnp
+import numpy as np
 import pytest
 
 from sgb.compression import (
+    compression,
     compression_ratio,
     dense_param_count,
     hidden_types_sweep,
+    setting_for_ratio,
     sgb_param_count,
     tree_param_count,
 )
@@ -42,3 +45,33 @@ def test_paper_mnist_shape_compression_grows_as_hidden_types_shrink():
 def test_bad_counts_raise(call, match):
     with pytest.raises(ValueError, match=match):
         call()
+
+
+def test_both_conventions_come_from_one_function():
+    sizes = (784, 800, 10)
+    assert compression("dense", sizes, 0, 30, 10) == 1.0
+    # ours: means, rhos and biases against weights and biases
+    assert compression("sgb", sizes, 20, 30, 10) == pytest.approx(
+        636_010 / (2 * (30 * 20 + 20 * 10) + 810)
+    )
+    # the authors': the mean table against the weights
+    assert compression("sgb", sizes, 20, 30, 10, "authors") == pytest.approx(
+        635_200 / (30 * 20 + 20 * 10)
+    )
+    # DGB: codes of 10 + 10 bits into the hidden layer's g-net, 10 bits + one-hot 10 out
+    gnets = 2 * ((20 * 7 + 7) + (7 * 10 + 10) + 11)
+    assert compression("dgb", sizes, 7, 30, 10) == pytest.approx(636_010 / (gnets + 810))
+    assert compression("dgb", sizes, 7, 30, 10, "authors") == pytest.approx(635_200 / gnets)
+    with pytest.raises(ValueError, match="convention"):
+        compression("sgb", sizes, 20, 30, 10, "other")
+
+
+def test_setting_for_ratio_is_nearest_on_a_log_scale():
+    sizes = (64, 800, 10)
+    for kind in ("sgb", "dgb"):
+        setting = setting_for_ratio(kind, sizes, 8.0, 30, 10)
+        best = abs(np.log(compression(kind, sizes, setting, 30, 10) / 8.0))
+        for other in (setting - 1, setting + 1):
+            assert best <= abs(np.log(compression(kind, sizes, other, 30, 10) / 8.0))
+    with pytest.raises(ValueError, match="ratio"):
+        setting_for_ratio("sgb", sizes, -1.0, 30, 10)

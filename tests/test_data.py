@@ -70,6 +70,65 @@ def test_mnist_loads_written_idx_files(tmp_path, monkeypatch):
     np.testing.assert_allclose(ds.x_train, (raw - raw.mean()) / (raw.std() + 1e-6), atol=1e-4)
 
 
+def _write_fashion(directory: Path, rng: np.random.Generator, monkeypatch) -> dict:
+    """Small Fashion-MNIST-format files in ``directory``; the expected MD5s become theirs."""
+    directory.mkdir(parents=True, exist_ok=True)
+    arrays = {
+        "train_images": rng.integers(0, 256, (12, 28, 28)),
+        "train_labels": rng.integers(0, 10, 12),
+        "test_images": rng.integers(0, 256, (5, 28, 28)),
+        "test_labels": rng.integers(0, 10, 5),
+    }
+    files = {}
+    for split, array in arrays.items():
+        remote, _ = data.FASHION_MNIST_FILES[split]
+        raw = _idx_bytes(array)
+        (directory / remote.name).write_bytes(gzip.compress(raw, compresslevel=1))
+        files[split] = (remote._replace(md5="0" * 32), data.hashlib.md5(raw).hexdigest())
+    monkeypatch.setattr(data, "FASHION_MNIST_FILES", files)
+    return arrays
+
+
+def test_fashion_mnist_reads_the_system_copy_by_its_decompressed_md5(tmp_path, monkeypatch):
+    system = tmp_path / "system"
+    arrays = _write_fashion(system, np.random.default_rng(2), monkeypatch)
+    monkeypatch.setattr(data, "FASHION_MNIST_SYSTEM_DIR", system)
+    monkeypatch.setattr(data, "download_url", lambda url, path: pytest.fail("downloaded"))
+    ds = data.fashion_mnist(directory=tmp_path / "cache")
+    assert ds.name == "fashion-mnist" and ds.x_train.shape == (12, 784)
+    np.testing.assert_array_equal(ds.y_train, arrays["train_labels"])
+    np.testing.assert_allclose(ds.x_train.mean(), 0.0, atol=1e-5)
+
+
+def test_fashion_mnist_skips_a_corrupt_copy_and_downloads_when_none_is_good(tmp_path, monkeypatch):
+    system, cache = tmp_path / "system", tmp_path / "cache"
+    arrays = _write_fashion(system, np.random.default_rng(3), monkeypatch)
+    good = {
+        remote.name: (system / remote.name).read_bytes()
+        for remote, _ in data.FASHION_MNIST_FILES.values()
+    }
+    name = data.FASHION_MNIST_FILES["test_labels"][0].name
+    (system / name).write_bytes(gzip.compress(b"\x00\x00\x08\x01" + bytes(4)))  # wrong
+    files = {
+        split: (remote._replace(md5=data.hashlib.md5(good[remote.name]).hexdigest()), raw)
+        for split, (remote, raw) in data.FASHION_MNIST_FILES.items()
+    }
+    monkeypatch.setattr(data, "FASHION_MNIST_FILES", files)
+    monkeypatch.setattr(data, "FASHION_MNIST_SYSTEM_DIR", system)
+    downloads = []
+
+    def fake_download(url, path):
+        downloads.append(url)
+        Path(path).write_bytes(good[Path(path).name])
+
+    monkeypatch.setattr(data, "download_url", fake_download)
+    ds = data.fashion_mnist(directory=cache)
+    np.testing.assert_array_equal(ds.y_test, arrays["test_labels"])
+    assert downloads == [data.FASHION_MNIST_FILES["test_labels"][0].urls[0]]
+    data.fashion_mnist(directory=cache)  # the cached copy now passes: no second download
+    assert len(downloads) == 1
+
+
 def test_cifar10_parses_written_tarball(tmp_path, monkeypatch):
     path = tmp_path / data.CIFAR10_FILE.name
     batches = _cifar_tar(path, np.random.default_rng(1))
@@ -146,3 +205,12 @@ def test_features_constant_on_the_training_set_stay_bounded():
     np.testing.assert_allclose(test, [[16.0, 0.0]])
     ds = data.load("digits")
     assert np.abs(ds.x_test).max() < 100.0
+
+
+@pytest.mark.skipif(
+    not data.FASHION_MNIST_SYSTEM_DIR.is_dir(), reason="Debian's dataset-fashion-mnist absent"
+)
+def test_installed_fashion_mnist_passes_its_checks():
+    ds = data.load("fashion-mnist")
+    assert ds.x_train.shape == (60_000, 784) and ds.x_test.shape == (10_000, 784)
+    np.testing.assert_array_equal(ds.y_train[:10], [9, 0, 0, 3, 0, 2, 7, 2, 5, 5])

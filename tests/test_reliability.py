@@ -11,9 +11,10 @@ import pytest
 from sgb import provenance
 from sgb.__main__ import main
 from sgb.data import digits
+from sgb.dgb import DGBConfig
 from sgb.divergence import TrainingDiverged
 from sgb.provenance import read_results, results_file, write_results
-from sgb.supervised import ClassifierConfig, DenseConfig, train_classifier, train_dense
+from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate, train_classifier
 
 
 def test_a_failed_write_leaves_the_old_results_intact(tmp_path, monkeypatch):
@@ -84,13 +85,25 @@ def test_sgb_training_stops_on_divergence_and_reports_no_accuracy():
         train_classifier(config, _small_digits(), progress=False)
 
 
-@pytest.mark.parametrize("gnet_hidden", [None, (4,)])
-def test_dense_and_dgb_training_stop_on_divergence(gnet_hidden):
-    config = DenseConfig(
-        hidden=(16,), gnet_hidden=gnet_hidden, learning_rate=1e30, epochs=2, rounds=2, fit_steps=5
-    )
+@pytest.mark.parametrize(
+    "config",
+    [
+        DenseConfig(hidden=(16,), learning_rate=1e30, epochs=2),
+        DGBConfig(
+            hidden=(16,),
+            gnet_width=4,
+            learning_rate=1e30,
+            rounds=2,
+            pnet_steps=4,
+            batch_size=64,
+            gnet_steps=5,
+            validation_size=32,
+        ),
+    ],
+)
+def test_dense_and_dgb_training_stop_on_divergence(config):
     with pytest.raises(TrainingDiverged, match=r"at step \d+"):
-        train_dense(config, _small_digits(), progress=False)
+        train_and_evaluate(config, _small_digits(), progress=False)
 
 
 def test_committed_results_are_strict_json():

@@ -1,74 +1,31 @@
-"""Compression sweeps: one ratio function for every model, sweep summaries, the fig2 smoke run."""
+"""Compression sweeps: one ratio function for every model, resumable runs, summaries, the
+fig2 smoke run."""
 
 import time
 
-import jax
 import numpy as np
 import pytest
 
-from sgb import supervised
-from sgb.compression import compression_ratio, dense_param_count, tree_param_count
+from sgb.classifiers import dense_sizes
+from sgb.compression import compression
 from sgb.data import Dataset, load
+from sgb.dgb import DGBConfig
 from sgb.experiments import fig2
+from sgb.experiments.fig2 import SweepConfig, crossovers, run_one, summarise_sweep
 from sgb.provenance import read_results
-from sgb.supervised import (
-    ClassifierConfig,
-    DenseConfig,
-    SweepConfig,
-    compression_of,
-    crossovers,
-    dense_sizes,
-    make_model,
-    run_one,
-    setting_for_ratio,
-    summarise_sweep,
-    train_dense,
-)
-
-
-def test_sgb_and_dgb_ratios_come_from_one_function_and_count_real_parameters(monkeypatch):
-    sizes = (64, 40, 10)
-    calls = []
-
-    def spy(uncompressed, compressed):
-        calls.append((uncompressed, compressed))
-        return compression_ratio(uncompressed, compressed)
-
-    monkeypatch.setattr(supervised, "compression_ratio", spy)
-    sgb_ratio = compression_of("sgb", sizes, 6, 30, 10)
-    dgb_ratio = compression_of("dgb", sizes, 5, 30, 10)
-    assert [c[0] for c in calls] == [dense_param_count(sizes)] * 2
-
-    x = np.zeros((1, 64), np.float32)
-    sgb_model = make_model(ClassifierConfig(hidden=(40,), cell_types=(30, 6, 10)), 10)
-    sgb_params = sgb_model.init({"params": jax.random.key(0), "sample": jax.random.key(1)}, x)
-    assert calls[0][1] == tree_param_count(sgb_params["params"])
-    data = Dataset("toy", np.zeros((8, 64), np.float32), np.zeros(8, np.int32), x, x[:, 0], 10)
-    _, dgb_params, _ = train_dense(
-        DenseConfig(hidden=(40,), gnet_hidden=(5,), epochs=1, batch_size=8, rounds=1, fit_steps=1),
-        data,
-        progress=False,
-    )
-    biases = sum(np.size(v["bias"]) for v in dgb_params["params"].values())
-    assert calls[1][1] == tree_param_count(dgb_params["genome"]) + biases
-    assert sgb_ratio == pytest.approx(dense_param_count(sizes) / calls[0][1])
-    assert dgb_ratio == pytest.approx(dense_param_count(sizes) / calls[1][1])
-
-
-def test_setting_for_ratio_is_nearest_on_a_log_scale():
-    sizes = (64, 800, 10)
-    for kind in ("sgb", "dgb"):
-        setting = setting_for_ratio(kind, sizes, 8.0, 30, 10)
-        best = abs(np.log(compression_of(kind, sizes, setting, 30, 10) / 8.0))
-        for other in (setting - 1, setting + 1):
-            assert best <= abs(np.log(compression_of(kind, sizes, other, 30, 10) / 8.0))
-    with pytest.raises(ValueError, match="ratio"):
-        setting_for_ratio("sgb", sizes, -1.0, 30, 10)
+from sgb.supervised import ClassifierConfig, DenseConfig, dense_accuracy, train_dense
 
 
 def test_summary_and_crossover_of_synthetic_records():
     records = [
-        {"model": m, "setting": s, "seed": seed, "compression": c, "accuracy": a + 0.01 * seed}
+        {
+            "model": m,
+            "setting": s,
+            "seed": seed,
+            "compression": c,
+            "compression_authors": 3 * c,
+            "accuracy": a + 0.01 * seed,
+        }
         for m, rows in {
             "sgb": [(1, 10.0, 0.80), (2, 100.0, 0.70)],
             "dgb": [(1, 10.0, 0.90), (2, 100.0, 0.50)],
@@ -83,6 +40,8 @@ def test_summary_and_crossover_of_synthetic_records():
     # difference -0.1 at log10 = 1 and +0.2 at log10 = 2: zero a third of the way
     (point,) = crossovers(summary)
     assert point == pytest.approx(10 ** (1 + 1 / 3))
+    both = fig2.sweep_summary(records)
+    assert both["authors"]["crossovers"] == pytest.approx([3 * point])
 
 
 def test_conv_classifiers_run_on_images():
@@ -97,20 +56,23 @@ def test_conv_classifiers_run_on_images():
         in_types=8,
         out_types=3,
         sgb=ClassifierConfig(epochs=1, batch_size=16, eval_individuals=2),
-        dgb=DenseConfig(epochs=1, batch_size=16, rounds=1, fit_steps=2),
+        dgb=DGBConfig(rounds=1, pnet_steps=2, batch_size=16, gnet_steps=2, validation_size=8),
+        dense=DenseConfig(epochs=1, batch_size=16),
     )
     for kind, setting in (("sgb", 4), ("dgb", 3)):
         record = run_one(kind, setting, 0, data, sweep)
-        assert 0.0 <= record["accuracy"] <= 1.0 and record["compression"] > 1.0
+        assert 0.0 <= record["accuracy"] <= 1.0
+        assert record["compression"] == compression(kind, (64, 12, 3), setting, 8, 3)
+        assert record["compression_authors"] > record["compression"]
 
 
 def test_uncompressed_baseline_learns_digits():
     data = load("digits")
     model, params, _ = train_dense(DenseConfig(hidden=(64,), epochs=15), data, progress=False)
-    assert supervised.dense_accuracy(model, params, data.x_test, data.y_test) > 0.9
+    assert dense_accuracy(model, params, data.x_test, data.y_test) > 0.9
 
 
-def test_fig2_smoke_sweep_runs_end_to_end_in_under_a_minute(tmp_path):
+def test_fig2_smoke_sweep_runs_end_to_end_and_resumes(tmp_path, monkeypatch):
     start = time.perf_counter()
     path = fig2.run("smoke", tmp_path, dataset="digits", progress=False)
     assert time.perf_counter() - start < 60
@@ -118,10 +80,36 @@ def test_fig2_smoke_sweep_runs_end_to_end_in_under_a_minute(tmp_path):
     assert path.name == "fig2_digits_smoke.json"
     assert payload["provenance"]["profile"] == "smoke"
     results = payload["results"]
-    assert {"sgb", "dgb", "dense"} == set(results["summary"])
-    for kind in ("sgb", "dgb"):
-        assert len(results["summary"][kind]["compression"]) == 2
+    for convention in ("ours", "authors"):
+        assert {"sgb", "dgb", "dense"} == set(results[convention]["summary"])
+        for kind in ("sgb", "dgb"):
+            assert len(results[convention]["summary"][kind]["compression"]) == 2
     accuracies = [r["accuracy"] for r in results["records"]]
     assert max(accuracies) > 0.5  # above chance (0.1) for the uncompressed network at least
+
+    # a rerun finds every cell done and trains nothing
+    def fail(*args, **kwargs):
+        raise AssertionError("a finished cell was run again")
+
+    monkeypatch.setattr(fig2, "run_one", fail)
+    assert read_results(fig2.run("smoke", tmp_path, dataset="digits"))["results"] == results
     with pytest.raises(ValueError, match="cifar10"):
         fig2.run("smoke", tmp_path, dataset="cifar10")
+
+
+def test_resume_refuses_results_of_another_config(tmp_path, monkeypatch):
+    path = tmp_path / "fig2_digits_smoke.json"
+    path.write_text('{"provenance": {"config": {"other": 1}}, "results": {}}')
+    with pytest.raises(ValueError, match="another config"):
+        fig2.run("smoke", tmp_path, dataset="digits")
+
+
+def test_fashion_mnist_main_setting_counts_the_kl_per_synapse():
+    sweep, ablation = fig2.PROFILES["cpu"]["fashion-mnist"]
+    assert sweep.sgb.kl_counting == "synapse" and ablation.sgb.kl_counting == "table"
+    assert sweep.hidden == (800,) and (sweep.in_types, sweep.out_types) == (30, 10)
+    assert len(sweep.ratios) >= 7 and len(sweep.seeds) == 3 and sweep.dgb.rounds >= 100
+    sizes = (784, 800, 10)
+    cells = fig2.sweep_cells(sweep, sizes)
+    authors = [compression(k, sizes, s, 30, 10, "authors") for k, s, _ in cells if k != "dense"]
+    assert min(authors) < 25 and max(authors) >= 1000

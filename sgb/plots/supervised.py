@@ -8,17 +8,31 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from sgb.experiments.fig2 import summarise_sweep
 from sgb.plots import PALETTE, subplots
-from sgb.supervised import summarise_sweep
 
 _LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
+_AXES = {
+    "ours": "compression ratio, every parameter counted",
+    "authors": "compression ratio, authors' count (weights / tables or g-nets)",
+}
+_KL = {"synapse": "KL per synapse (Bayes by backprop)", "table": "KL per type pair (genome)"}
 
 
 def _band(ax: Axes, table: Mapping[str, list], color: str, label: str, **style) -> None:
     x, mean = np.asarray(table["compression"]), np.asarray(table["mean"])
     err = np.nan_to_num(np.asarray(table["sem"], dtype=float))
-    ax.plot(x, 100 * mean, color=color, label=label, marker="o", ms=4, **style)
-    ax.fill_between(x, 100 * (mean - err), 100 * (mean + err), color=color, alpha=0.2, lw=0)
+    ax.errorbar(
+        x,
+        100 * mean,
+        yerr=100 * err,
+        color=color,
+        label=label,
+        marker="o",
+        ms=4,
+        capsize=2,
+        **style,
+    )
 
 
 def _log_x(ax: Axes) -> None:
@@ -29,30 +43,32 @@ def _log_x(ax: Axes) -> None:
 
 
 def plot_accuracy_vs_compression(
-    ax: Axes, results: Mapping[str, Any], mean_network: bool = True
+    ax: Axes, results: Mapping[str, Any], convention: str = "ours", mean_network: bool = True
 ) -> None:
-    """One dataset's panel: SGB and DGB mean innate test accuracy (%) +- SEM over seeds
-    against compression (log axis), the SGB's mean network and the uncompressed network."""
-    summary = results["summary"]
+    """One panel: SGB and DGB mean innate test accuracy (%) +- SEM over seeds against
+    compression under ``convention`` (log axis), the SGB's mean network, the uncompressed
+    network (dotted) and the SGB/DGB crossovers (thin vertical lines)."""
+    part = results[convention]
+    summary = part["summary"]
     for kind in ("dgb", "sgb"):
         if kind in summary:
             _band(ax, summary[kind], PALETTE[kind], _LABELS[kind])
-    if mean_network and results.get("summary_mean_network", {}).get("sgb"):
-        table = results["summary_mean_network"]["sgb"]
+    if mean_network and part.get("summary_mean_network", {}).get("sgb"):
+        table = part["summary_mean_network"]["sgb"]
         _band(ax, table, PALETTE["mean_network"], "SGB mean network", ls="--")
     if "dense" in summary:
         base = 100 * np.mean(summary["dense"]["mean"])
         ax.axhline(base, color=PALETTE["baseline"], ls=":", label="uncompressed network")
-    for point in results.get("crossovers", []):
+    for point in part.get("crossovers", []):
         ax.axvline(point, color="k", lw=0.8, alpha=0.5)
     _log_x(ax)
-    ax.set_xlabel("compression ratio (uncompressed / genome parameters)")
+    ax.set_xlabel(_AXES[convention])
     ax.set_ylabel("innate test accuracy (%)")
     ax.set_title(str(results["dataset"]))
 
 
 def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]]) -> Figure:
-    """Figure 2: one panel per dataset; a thin vertical line marks each SGB/DGB crossover."""
+    """Figure 2, every parameter counted: one panel per dataset."""
     fig, axes = subplots(
         1, len(results_by_dataset), figsize=(5.2 * len(results_by_dataset), 4.0), squeeze=False
     )
@@ -62,12 +78,22 @@ def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]]) -> Figure:
     return fig
 
 
-def plot_kl_counting(ax: Axes, results: Mapping[str, Any]) -> None:
-    """SGB innate accuracy with the KL counted per type pair (the sweep) and per synapse
+def figure2_conventions(results: Mapping[str, Any]) -> Figure:
+    """Figure 2 for one dataset under both counting conventions, side by side."""
+    fig, axes = subplots(1, 2, figsize=(10.4, 4.0), sharey=True)
+    for ax, convention in zip(axes, ("ours", "authors"), strict=True):
+        plot_accuracy_vs_compression(ax, results, convention)
+    axes[0].legend(fontsize=8, loc="lower left")
+    return fig
+
+
+def plot_kl_counting(ax: Axes, results: Mapping[str, Any], main_counting: str) -> None:
+    """SGB innate accuracy with the sweep's KL counting ``main_counting`` and the other one
     (the ablation), at the ablation's compression ratios, mean +- SEM over seeds."""
+    other = "table" if main_counting == "synapse" else "synapse"
     table = summarise_sweep([r for r in results["records"] if r["model"] == "sgb"])["sgb"]
     ablation = summarise_sweep(results["ablation_records"])["sgb"]
-    _band(ax, table, PALETTE["sgb"], "KL per type pair (genome)")
+    _band(ax, table, PALETTE["sgb"], _KL[main_counting])
     ax.errorbar(
         ablation["compression"],
         100 * np.asarray(ablation["mean"]),
@@ -76,10 +102,10 @@ def plot_kl_counting(ax: Axes, results: Mapping[str, Any]) -> None:
         marker="s",
         ls="none",
         capsize=3,
-        label="KL per synapse (Bayes by backprop)",
+        label=_KL[other],
     )
     _log_x(ax)
-    ax.set_xlabel("compression ratio")
+    ax.set_xlabel(_AXES["ours"])
     ax.set_ylabel("innate test accuracy (%)")
     ax.set_title(f"{results['dataset']}: how the KL is counted")
     ax.legend(fontsize=8)
