@@ -1,8 +1,6 @@
 """Compression sweeps: one ratio function for every model, resumable runs, summaries, the
 fig2 smoke run."""
 
-import time
-
 import numpy as np
 import pytest
 
@@ -73,9 +71,7 @@ def test_uncompressed_baseline_learns_digits():
 
 
 def test_fig2_smoke_sweep_runs_end_to_end_and_resumes(tmp_path, monkeypatch):
-    start = time.perf_counter()
     path = fig2.run("smoke", tmp_path, dataset="digits", progress=False)
-    assert time.perf_counter() - start < 60
     payload = read_results(path)
     assert path.name == "fig2_digits_smoke.json"
     assert payload["provenance"]["profile"] == "smoke"
