@@ -125,9 +125,7 @@ def genome_size(
     ``setting``: cell types of every hidden layer (``"sgb"``) or the width of the
     g-nets' first hidden layer (``"dgb"``); ignored for ``"dense"``.
     """
-    if convention not in CONVENTIONS:
-        raise ValueError(f"convention must be one of {CONVENTIONS}, got {convention!r}")
-    ours = convention == "ours"
+    ours = validation.choice("convention", convention, CONVENTIONS) == "ours"
     if kind == "sgb":
         types = (in_types, *([setting] * (len(sizes) - 2)), out_types)
         return sgb_param_count(sizes, types) if ours else sgb_table_count(sizes, types)
