@@ -11,13 +11,16 @@
 
 Usage: ``python benchmarks/bench_rl.py [--steps 2000000] [--seeds 0 1 2]
 [--out results/rl/bench_rl.json] [--max-runs N]``. Each finished run is kept in
-``--partial``; with ``--max-runs`` the benchmark runs in several sittings and the
-results file is written by the sitting that finishes it.
+``--partial`` with its commit and settings; with ``--max-runs`` the benchmark runs in
+several sittings and the results file is written by the sitting that finishes it. A
+kept run is reused only if its settings are today's and the code it ran (``sgb/`` for
+ours, ``sgb/rl/envs.py`` for Brax's) is unchanged since its commit.
 """
 
 import argparse
 import functools
 import json
+import subprocess
 import tempfile
 import time
 from dataclasses import asdict, replace
@@ -28,7 +31,7 @@ import numpy as np
 from brax.training.agents.ppo import networks as brax_networks
 from brax.training.agents.ppo import train as brax_ppo
 
-from sgb.provenance import git_commit, provenance, write_results
+from sgb.provenance import atomic_write, git_commit, provenance, write_results
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.population import population_returns
@@ -133,6 +136,24 @@ def _load(path: Path) -> dict:
     return json.loads(path.read_text()) if path.exists() else {}
 
 
+CODE_OF = {
+    "brax": ["sgb/rl/envs.py"],
+    "ours": ["sgb"],
+    "sgb_64_types": ["sgb"],
+    "throughput": ["sgb"],
+}
+
+
+def _still_valid(run: dict, name: str, settings: dict) -> bool:
+    """Whether a kept run used today's settings and code (committed, unchanged since)."""
+    commit = run.get("git_commit", "")
+    if run.get("settings") != settings or commit.endswith("+dirty") or commit == "unknown":
+        return False
+    root = Path(__file__).resolve().parent.parent
+    diff = ["git", "diff", "--quiet", commit, "HEAD", "--", *CODE_OF[name]]
+    return subprocess.run(diff, cwd=root).returncode == 0
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--steps", type=int, default=2_000_000)
@@ -150,25 +171,31 @@ def main() -> None:
     config = PPOConfig(env=EnvSpec("ant", "spring"), total_steps=args.steps, num_evals=4)
     sgb_config = replace(config, network=NetworkConfig(cell_types=64))
     done = _load(args.partial)
-    if done and done.get("git_commit") != git_commit():
-        raise SystemExit(f"{args.partial} comes from another commit; delete it to start again")
-    done.setdefault("git_commit", git_commit())
-    plan = [("throughput", None, lambda _: population_throughput())]
+    settings = {"ours": asdict(config), "sgb_64_types": asdict(sgb_config)}
+    plan = [("brax", seed, lambda seed: brax_reference(config, seed)) for seed in args.seeds]
     plan += [("ours", seed, lambda seed: ours(config, seed)) for seed in args.seeds]
-    plan += [("brax", seed, lambda seed: brax_reference(config, seed)) for seed in args.seeds]
+    plan += [("throughput", None, lambda _: population_throughput())]
     plan += [("sgb_64_types", seed, lambda seed: ours(sgb_config, seed)) for seed in args.sgb_seeds]
-    ran = 0
+    ran, keys = 0, []
     for name, seed, run in plan:
         key = name if seed is None else f"{name}/{seed}"
-        if key in done:
+        keys.append(key)
+        wanted = json.loads(json.dumps(settings.get(name, settings["ours"])))
+        if key in done and _still_valid(done[key], name, wanted):
             continue
         if args.max_runs is not None and ran >= args.max_runs:
             print("stopped; rerun to resume from", args.partial)
             return
         start = time.perf_counter()
-        done[key] = {"seed": seed, **run(seed), "bench_wall_time_s": time.perf_counter() - start}
+        done[key] = {
+            "seed": seed,
+            **run(seed),
+            "bench_wall_time_s": time.perf_counter() - start,
+            "git_commit": git_commit(),
+            "settings": wanted,
+        }
         print(key, done[key])
-        args.partial.write_text(json.dumps(done))
+        atomic_write(args.partial, json.dumps(done).encode())
         ran += 1
     results = {"throughput": done["throughput"], "sgb_network": asdict(sgb_config.network)}
     for name, seeds in (
@@ -189,8 +216,10 @@ def main() -> None:
         results["sgb_64_types_mean_steps_per_s"] / results["ours_mean_steps_per_s"]
     )
     print({k: v for k, v in results.items() if not isinstance(v, list | dict)})
-    wall = sum(run["bench_wall_time_s"] for key, run in done.items() if key != "git_commit")
+    runs = [done[key] for key in keys]
+    wall = sum(run["bench_wall_time_s"] for run in runs)
     record = provenance(config, "benchmark", args.seeds, wall)
+    record["run_commits"] = sorted({run["git_commit"] for run in runs})
     print("wrote", write_results(args.out, results, record))
 
 
