@@ -61,26 +61,28 @@ def genome_kl(
     prior: Prior,
     mu: jnp.ndarray,
     sigma: jnp.ndarray,
-    kernel: jnp.ndarray,
+    shape: Sequence[int],
     counting: KLCounting,
+    key: jax.Array,
 ) -> jnp.ndarray:
     """KL of one layer's genome to the prior, a scalar (nats).
 
-    ``mu``, ``sigma``: type tables; ``kernel``: the sampled full weights.
-    ``counting="synapse"`` sums the KL over every expanded synapse (as
-    Bayes by backprop does); ``"table"`` counts each type pair once (the genome
-    view: per pair, the mean of its synapses' Monte Carlo terms).
+    ``mu``, ``sigma``: type tables (k_in, k_out, ...) of a kernel of ``shape``. Every
+    synapse of a type pair has that pair's Gaussian, so the KL is computed per pair: in
+    closed form for a Gaussian prior, else as the one-draw Monte Carlo term
+    log q(w) - log p(w) at w = mu + sigma * eps, eps ~ N(0, 1) from ``key`` (unbiased).
+    ``counting="synapse"`` weights each pair by its number of synapses (the KL of the
+    full weight matrix, as Bayes by backprop counts it); ``"table"`` counts each pair once.
+    The cost is that of the tables, not of the kernel: the one KL of the layers and of
+    the RL actor-critic alike.
     """
     validation.choice("counting", counting, KL_COUNTINGS)
-    counts = jnp.asarray(block_counts(kernel.shape, mu.shape), dtype=kernel.dtype)
     if isinstance(prior, GaussianPrior):
-        return _count_pairs(prior.kl(mu, sigma), counts, counting)
-    mu_full = expand_table(mu, kernel.shape)
-    sigma_full = expand_table(sigma, kernel.shape)
-    per_synapse = prior.kl(mu_full, sigma_full, kernel)
-    if counting == "synapse":
-        return jnp.sum(per_synapse)
-    return jnp.sum(per_synapse / expand_table(counts, kernel.shape))
+        per_pair = prior.kl(mu, sigma)
+    else:
+        per_pair = prior.kl(mu, sigma, mu + sigma * jax.random.normal(key, mu.shape, mu.dtype))
+    counts = jnp.asarray(block_counts(shape, mu.shape), dtype=mu.dtype)
+    return _count_pairs(per_pair, counts, counting)
 
 
 def _count_pairs(per_pair: jnp.ndarray, counts: jnp.ndarray, counting: KLCounting) -> jnp.ndarray:
@@ -154,27 +156,27 @@ class _GenomeKernel(nn.Module):
         self, mean_network: bool, tables_only: bool = False
     ) -> jnp.ndarray | tuple[jnp.ndarray, jnp.ndarray]:
         """The drawn kernel (the mean kernel if ``mean_network``); with ``tables_only``,
-        the type tables (mu, sigma) instead, the KL estimated from one draw per type pair."""
+        the type tables (mu, sigma) instead. Sows the KL (``genome_kl``) when sampling."""
         mu = self.param("mu", nn.initializers.normal(self.mean_init_std), self.types)
         rho = self.param("rho", nn.initializers.constant(self.rho_init), self.types)
         sigma = jax.nn.softplus(rho)
         if tables_only:
             if not mean_network:
-                eps = jax.random.normal(self.make_rng("sample"), self.types, mu.dtype)
-                counts = jnp.asarray(block_counts(self.shape, self.types), dtype=mu.dtype)
-                per_pair = self.prior.kl(mu, sigma, mu + sigma * eps)
-                kl = _count_pairs(per_pair, counts, self.kl_counting)
-                self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
+                self._sow_kl(mu, sigma)
             return mu, sigma
         if mean_network:
             kernel = expand_table(mu, self.shape)
         else:
             kernel, noise = sample_kernel(mu, rho, self.make_rng("sample"), self.shape)
-            kl = genome_kl(self.prior, mu, sigma, kernel, self.kl_counting)
-            self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
+            self._sow_kl(mu, sigma)
             self.sow("individual", "noise", noise, init_fn=lambda: None, reduce_fn=_replace)
         self.sow("individual", "kernel", kernel, init_fn=lambda: None, reduce_fn=_replace)
         return kernel
+
+    def _sow_kl(self, mu: jnp.ndarray, sigma: jnp.ndarray) -> None:
+        key = self.make_rng("sample")
+        kl = genome_kl(self.prior, mu, sigma, self.shape, self.kl_counting, key)
+        self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
 
 
 class SGBDense(nn.Module):

@@ -109,46 +109,60 @@ def draw_noise(model: MLP, params: dict, key: jax.Array, obs_size: int) -> Noise
     return [drawn[f"hidden_{i}"]["genome"]["noise"] for i in range(len(model.config.hidden))]
 
 
-def individuals(model: MLP, params: dict, noise: Noise | None) -> tuple[Phenotype, jnp.ndarray]:
-    """Phenotypes from ``noise`` (``draw_noise`` vmapped: leading axis N) and KLs (N,), nats.
+def individuals(model: MLP, params: dict, noise: Noise | None) -> Phenotype:
+    """Phenotypes from ``noise`` (``draw_noise`` vmapped: leading axis N).
 
-    Each hidden kernel is ``sgb.layers.individual_kernel(mu, rho, noise)`` and its KL
-    ``sgb.layers.genome_kl`` (per synapse; closed form for a Gaussian prior).
-    Differentiable in ``params`` (reparameterised). For ``noise=None`` (vanilla networks,
-    or the mean network) returns the one deterministic phenotype without a leading axis
-    and KL 0; ``apply`` then shares it across the batch.
+    Each hidden kernel is ``sgb.layers.individual_kernel(mu, rho, noise)``, differentiable
+    in ``params`` (reparameterised). For ``noise=None`` (vanilla networks, or the mean
+    network) returns the one deterministic phenotype without a leading axis; ``apply``
+    then shares it across the batch.
     """
     cfg, p = model.config, params["params"]
-    prior = _prior(cfg)
     hidden = [p[f"hidden_{i}"] for i in range(len(cfg.hidden))]
     out = (p["out"]["kernel"], p["out"]["bias"])
     if not cfg.sgb:
-        return [(layer["kernel"], layer["bias"]) for layer in hidden] + [out], jnp.zeros(())
+        return [(layer["kernel"], layer["bias"]) for layer in hidden] + [out]
     if noise is None:
-        fan_ins = [hidden[0]["genome"]["mu"].shape[0], *cfg.hidden[:-1]]  # first: 1 type/entry
         kernels = [
-            expand_table(layer["genome"]["mu"], (n, w))
-            for layer, n, w in zip(hidden, fan_ins, cfg.hidden, strict=True)
+            expand_table(layer["genome"]["mu"], shape)
+            for layer, shape in zip(hidden, _kernel_shapes(model, params), strict=True)
         ]
-        return [(k, layer["bias"]) for k, layer in zip(kernels, hidden, strict=True)] + [
-            out
-        ], jnp.zeros(())
+        return [(k, layer["bias"]) for k, layer in zip(kernels, hidden, strict=True)] + [out]
 
-    def one(eps: Noise) -> tuple[Phenotype, jnp.ndarray]:
-        layers, kl = [], jnp.zeros(())
-        for layer, e in zip(hidden, eps, strict=True):
-            mu, rho = layer["genome"]["mu"], layer["genome"]["rho"]
-            kernel = individual_kernel(mu, rho, e)
-            kl = kl + genome_kl(prior, mu, jax.nn.softplus(rho), kernel, "synapse")
-            layers.append((kernel, layer["bias"]))
-        return layers + [out], kl
+    def one(eps: Noise) -> Phenotype:
+        kernels = [
+            individual_kernel(layer["genome"]["mu"], layer["genome"]["rho"], e)
+            for layer, e in zip(hidden, eps, strict=True)
+        ]
+        return [(k, layer["bias"]) for k, layer in zip(kernels, hidden, strict=True)] + [out]
 
     return jax.vmap(one)(noise)
 
 
-def drawn_individuals(
-    model: MLP, params: dict, keys: jax.Array | None, obs_size: int
-) -> tuple[Phenotype, jnp.ndarray]:
+def network_kl(model: MLP, params: dict, key: jax.Array) -> jnp.ndarray:
+    """KL of the network's genome to its prior, a scalar (nats): ``sgb.layers.genome_kl``
+    of every SGB hidden layer, synapses counted; 0 for vanilla networks."""
+    cfg = model.config
+    if not cfg.sgb:
+        return jnp.zeros(())
+    prior = _prior(cfg)
+    shapes = _kernel_shapes(model, params)
+    keys = jax.random.split(key, len(shapes))
+    genomes = [params["params"][f"hidden_{i}"]["genome"] for i in range(len(shapes))]
+    return sum(
+        genome_kl(prior, g["mu"], jax.nn.softplus(g["rho"]), shape, "synapse", k)
+        for g, shape, k in zip(genomes, shapes, keys, strict=True)
+    )
+
+
+def _kernel_shapes(model: MLP, params: dict) -> list[tuple[int, int]]:
+    """(n_in, n_out) of each hidden kernel; the first layer has one type per input entry."""
+    cfg = model.config
+    n_obs = params["params"]["hidden_0"]["genome"]["mu"].shape[0]
+    return list(zip((n_obs, *cfg.hidden[:-1]), cfg.hidden, strict=True))
+
+
+def drawn_individuals(model: MLP, params: dict, keys: jax.Array | None, obs_size: int) -> Phenotype:
     """``individuals`` of the keys (N, 2), one each; ``keys=None``: the mean network."""
     if keys is None:
         return individuals(model, params, None)

@@ -38,7 +38,7 @@ def _returns(
     or every row by the mean network when ``ind_keys`` is None."""
     env = make_env(spec)
     actor = MLP(network, 2 * env.action_size)
-    layers, _ = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
+    layers = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
     batched = network.sgb and ind_keys is not None
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 

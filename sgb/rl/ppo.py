@@ -21,10 +21,10 @@ One training iteration:
    pi_new(a|s) / pi_old(a|s) compares the same individual (same noise draw)
    before and after the genome update, as reparameterised sampling allows.
    Loss = PPO clip loss + c1 * 0.5 * squared value error - c2 entropy
-   + c3 (KL of actor and critic genomes, averaged over the minibatch's
-   individuals). The entropy is that of the squashed action tanh(u),
-   estimated at one reparameterised draw (as Brax's PPO does). Advantages by
-   GAE, normalised over the valid steps.
+   + c3 (KL of the actor and critic genomes, ``sgb.rl.networks.network_kl``:
+   per type pair, so its cost is that of the tables). The entropy is that of
+   the squashed action tanh(u), estimated at one reparameterised draw (as
+   Brax's PPO does). Advantages by GAE, normalised over the valid steps.
 
 The vanilla network is the special case with no sampling and no KL.
 """
@@ -51,6 +51,7 @@ from sgb.rl.networks import (
     apply,
     draw_noise,
     individuals,
+    network_kl,
     tanh_gaussian_entropy,
     tanh_gaussian_log_prob,
 )
@@ -219,8 +220,8 @@ def _masked_mean(x, mask):
 def _loss(params: Params, data: Unroll, normalizer: Normalizer, key: jax.Array, config: PPOConfig):
     _, actor, critic = _models(config)
     sgb = config.network.sgb
-    a_layers, a_kl = individuals(actor, params.actor, data.actor_noise)
-    c_layers, c_kl = individuals(critic, params.critic, data.critic_noise)
+    a_layers = individuals(actor, params.actor, data.actor_noise)
+    c_layers = individuals(critic, params.critic, data.critic_noise)
     obs = normalize(normalizer, data.obs)
     all_obs = jnp.concatenate([obs, normalize(normalizer, data.last_obs)[:, None]], axis=1)
     values = apply(c_layers, all_obs, sgb)[..., 0]
@@ -243,9 +244,10 @@ def _loss(params: Params, data: Unroll, normalizer: Normalizer, key: jax.Array, 
     clipped = jnp.clip(ratio, 1 - config.clip, 1 + config.clip)
     policy_loss = -_masked_mean(jnp.minimum(ratio * adv, clipped * adv), data.valid)
     value_loss = 0.5 * _masked_mean((values[:, :-1] - target) ** 2, data.valid)
-    u = loc + scale * jax.random.normal(key, loc.shape)  # reparameterised draw for the entropy
+    k_entropy, k_actor, k_critic = jax.random.split(key, 3)
+    u = loc + scale * jax.random.normal(k_entropy, loc.shape)  # reparameterised, for the entropy
     entropy = _masked_mean(tanh_gaussian_entropy(scale, u), data.valid)
-    kl = jnp.mean(a_kl) + jnp.mean(c_kl)
+    kl = network_kl(actor, params.actor, k_actor) + network_kl(critic, params.critic, k_critic)
     total = (
         policy_loss
         + config.value_coef * value_loss
@@ -322,7 +324,7 @@ def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
     env_state = jax.tree_util.tree_map(pick, resets, ts.env_state)
     actor_noise, critic_noise = _births(ts, config, fresh, k_birth)
     steps = jnp.where(fresh, 0.0, ts.steps)
-    layers, _ = individuals(actor, ts.params.actor, actor_noise)
+    layers = individuals(actor, ts.params.actor, actor_noise)
 
     def step(carry, k):
         state, steps, finished = carry

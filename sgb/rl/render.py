@@ -65,7 +65,7 @@ def _trajectories(
     """Joint positions (N, steps + 1, nq) of N individuals from one shared initial state."""
     env = make_env(spec)
     actor = MLP(network, 2 * env.action_size)
-    layers, _ = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
+    layers = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
     n = ind_keys.shape[0]
     state = jax.vmap(env.reset)(jnp.broadcast_to(reset_key, (n, *reset_key.shape)))
 
