@@ -29,6 +29,7 @@ import jax.numpy as jnp
 
 from sgb import validation
 from sgb.celltypes import assign_cell_types, block_counts, expand_table, type_sizes
+from sgb.noise import standard_normal
 from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
 
 KLCounting = Literal["synapse", "table"]
@@ -114,8 +115,9 @@ def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarra
 
 
 def weight_noise(key: jax.Array, shape: tuple[int, ...]) -> jnp.ndarray:
-    """Standard normal noise of ``shape``: one independent draw per synapse."""
-    return jax.random.normal(key, shape)
+    """Standard normal noise of ``shape``: one independent draw per synapse
+    (``sgb.noise.standard_normal``)."""
+    return standard_normal(key, shape)
 
 
 def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
