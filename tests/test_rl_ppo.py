@@ -155,18 +155,22 @@ def test_ratio_is_one_for_the_collecting_individual():
 def test_gae_matches_a_loop():
     rng = np.random.default_rng(0)
     t = 6
-    reward, value, next_value = rng.normal(size=(3, t))
+    reward, value = rng.normal(size=(2, t))
+    next_value = np.append(value[1:], rng.normal())  # V(s_{t+1}), as the unroll gives it
     done = np.array([0, 0, 1, 0, 0, 1.0])
     trunc = np.array([0, 0, 0, 0, 0, 1.0])
     adv, target = gae(*(jnp.asarray(x) for x in (reward, value, next_value, done, trunc)), 0.9, 0.8)
-    expected, running = np.zeros(t), 0.0
+    lambda_return, policy_adv = np.zeros(t), np.zeros(t)
     for i in reversed(range(t)):
         terminal = done[i] * (1 - trunc[i])
-        delta = reward[i] + 0.9 * (1 - terminal) * next_value[i] - value[i]
-        running = delta + 0.9 * 0.8 * (1 - done[i]) * running
-        expected[i] = running
-    np.testing.assert_allclose(adv, expected, rtol=1e-5)
-    np.testing.assert_allclose(target, expected + value, rtol=1e-5)
+        bootstrap = next_value[i] if i == t - 1 or done[i] else lambda_return[i + 1]
+        policy_adv[i] = reward[i] + 0.9 * (1 - terminal) * bootstrap - value[i]
+        # G_t = r_t + gamma * ((1 - lambda) V(s_{t+1}) + lambda G_{t+1}), cut at episode ends
+        following = next_value[i] if i == t - 1 or done[i] else lambda_return[i + 1]
+        mixed = (1 - 0.8) * next_value[i] + 0.8 * following
+        lambda_return[i] = reward[i] + 0.9 * (1 - terminal) * mixed
+    np.testing.assert_allclose(target, lambda_return, rtol=1e-5)
+    np.testing.assert_allclose(adv, policy_adv, rtol=1e-5)
 
 
 def test_normalizer_matches_numpy():

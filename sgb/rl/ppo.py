@@ -194,10 +194,15 @@ def _births(
 
 
 def gae(reward, value, next_value, done, truncation, discount, lam):
-    """Advantages and value targets along the last axis (time).
+    """Policy advantages and value targets along the last axis (time).
 
-    ``value``/``next_value``: V(s_t), V(s_{t+1}); terminal steps (done and
-    not truncated) do not bootstrap; truncated steps bootstrap from s_{t+1}.
+    The value targets are the lambda-returns G_t = V(s_t) + A_t, with A_t the GAE(lambda)
+    advantages. The policy's advantage is the one-step advantage towards the next
+    lambda-return, r_t + discount * G_{t+1} - V(s_t) = delta_t + discount * A_{t+1}, as
+    Brax's PPO computes it (measured on the Ant: GAE(lambda) itself left two of three
+    seeds standing at 2M steps). ``value``/``next_value``: V(s_t), V(s_{t+1}); terminal
+    steps (done and not truncated) do not bootstrap; truncated steps bootstrap from
+    s_{t+1}; the last step's G_{t+1} is V(s_{t+1}).
     """
     terminal = done * (1.0 - truncation)
     delta = reward + discount * (1.0 - terminal) * next_value - value
@@ -210,7 +215,8 @@ def gae(reward, value, next_value, done, truncation, discount, lam):
     xs = (jnp.moveaxis(delta, -1, 0), jnp.moveaxis(1.0 - done, -1, 0))
     _, adv = jax.lax.scan(back, jnp.zeros(delta.shape[:-1]), xs, reverse=True)
     adv = jnp.moveaxis(adv, 0, -1)
-    return adv, adv + value
+    next_adv = jnp.concatenate([adv[..., 1:], jnp.zeros_like(adv[..., :1])], axis=-1)
+    return delta + discount * (1.0 - done) * next_adv, adv + value
 
 
 def _masked_mean(x, mask):
