@@ -293,3 +293,53 @@ def test_tanh_entropy_estimate_is_the_mean_negative_log_density():
     estimate, reference = both(0.5)
     np.testing.assert_allclose(estimate, reference, atol=0.01)
     assert both(5.0)[0] < both(1.0)[0]
+
+
+def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one(
+    tmp_path, monkeypatch
+):
+    from sgb.rl import ppo
+
+    config = _config(4, total_steps=3 * 64 * 8, num_evals=3)
+    uninterrupted = train(config, seed=2, progress=False)
+    state_file = tmp_path / "run.state.npz"
+    real, calls = ppo.train_iterations, []
+
+    def killed_at_the_second_chunk(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(ppo, "train_iterations", killed_at_the_second_chunk)
+    with pytest.raises(KeyboardInterrupt):
+        train(config, seed=2, progress=False, state_file=state_file)
+    monkeypatch.setattr(ppo, "train_iterations", real)
+    resumed = train(config, seed=2, progress=False, state_file=state_file)
+    assert resumed.eval_steps == uninterrupted.eval_steps
+    np.testing.assert_array_equal(resumed.eval_returns, uninterrupted.eval_returns)
+    for a, b in zip(
+        jax.tree_util.tree_leaves(resumed.params),
+        jax.tree_util.tree_leaves(uninterrupted.params),
+        strict=True,
+    ):
+        np.testing.assert_array_equal(a, b)
+    # a finished state file returns the result at once; another run's is refused
+    assert train(config, seed=2, progress=False, state_file=state_file).eval_returns == (
+        resumed.eval_returns
+    )
+    with pytest.raises(ValueError, match="another run"):
+        train(config, seed=3, progress=False, state_file=state_file)
+
+
+def test_a_sweep_reuses_a_finished_run_only_with_the_same_settings(tmp_path):
+    from sgb.experiments.rl import finished_run
+
+    config = _config(total_steps=2 * 64 * 8)
+    result = train(config, seed=0, progress=False)
+    checkpoint = checkpoints.save(tmp_path / "run.msgpack", result)
+    assert finished_run(tmp_path / "missing.msgpack", config) is None
+    kept = finished_run(checkpoint, config)
+    assert kept["eval_returns"] == result.eval_returns
+    assert kept["eval_steps"] == result.eval_steps
+    assert finished_run(checkpoint, _config(total_steps=4 * 64 * 8)) is None

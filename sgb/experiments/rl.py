@@ -96,7 +96,12 @@ def checkpoint_name(env: str, cell_types: int | None, seed: int, profile: str) -
 
 
 def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
-    """Train the sweep; write per-run returns, fractions of vanilla and checkpoints."""
+    """Train the sweep; write per-run returns, fractions of vanilla and checkpoints.
+
+    Nothing is lost when the sweep dies: a run whose checkpoint exists with this
+    profile's settings is not trained again, and a run in progress keeps its training
+    state next to its checkpoint (``*.state.npz``) and continues from it.
+    """
     config = sweep_config(env, profile)
     path = results_file(Path(out_dir) / "rl", f"fig3_{env}", profile)
     start = time.perf_counter()
@@ -104,23 +109,41 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     for k in config.cell_types:
         ppo = replace(config.ppo, network=NetworkConfig(cell_types=k))
         for seed in config.seeds:
-            result = train(ppo, seed=seed)
             checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile)
-            checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
+            curve = finished_run(checkpoint, ppo)
+            if curve is None:
+                state_file = checkpoint.with_suffix(".state.npz")
+                result = train(ppo, seed=seed, state_file=state_file)
+                checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
+                state_file.unlink()
+                curve = {
+                    "eval_steps": result.eval_steps,
+                    "eval_returns": result.eval_returns,
+                    "train_steps_per_s": result.train_steps_per_s,
+                }
             runs.append(
                 {
                     "cell_types": k,
                     "seed": seed,
-                    "final_return": result.eval_returns[-1],
-                    "eval_steps": result.eval_steps,
-                    "eval_returns": result.eval_returns,
-                    "train_steps_per_s": result.train_steps_per_s,
+                    "final_return": curve["eval_returns"][-1],
+                    **curve,
                     "checkpoint": checkpoint.name,
                 }
             )
     results = {"env": env, "runs": runs, "summary": summarise_sweep(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
     return write_results(path, results, record)
+
+
+def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
+    """The learning curve kept in ``checkpoint`` if it holds a run trained with ``ppo``
+    (``None`` if there is none, or it was trained with other settings)."""
+    if not checkpoint.exists():
+        return None
+    config, _, _, meta = checkpoints.load(checkpoint)
+    if config != ppo:
+        return None
+    return {key: meta[key] for key in ("eval_steps", "eval_returns", "train_steps_per_s")}
 
 
 def seed_sem(values: np.ndarray) -> float:

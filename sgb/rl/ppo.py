@@ -32,6 +32,7 @@ The vanilla network is the special case with no sampling and no KL.
 import time
 from dataclasses import dataclass, field
 from functools import partial
+from pathlib import Path
 from typing import NamedTuple
 
 import jax
@@ -40,7 +41,7 @@ import numpy as np
 import optax
 from tqdm.auto import tqdm
 
-from sgb import validation
+from sgb import resume, validation
 from sgb.divergence import check_loss, check_params
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
@@ -436,35 +437,60 @@ def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: in
     return float(np.mean(returns))
 
 
-def train(config: PPOConfig, seed: int = 0, progress: bool = True) -> TrainResult:
+def train(
+    config: PPOConfig,
+    seed: int = 0,
+    progress: bool = True,
+    state_file: str | Path | None = None,
+) -> TrainResult:
     """Train with PPO; evaluates ``num_evals`` times, the last one after the final update.
 
     Runs ``num_evals`` chunks of ``iterations // num_evals`` iterations (so
     the steps trained are ``total_steps`` rounded down to a whole number of
     chunks).
     ``train_steps_per_s`` counts environment steps of training only (after the
-    first, compiling, chunk; evaluations excluded).
+    first, compiling, chunk of each sitting; evaluations excluded).
+
+    With ``state_file``, the whole training state is saved there after every chunk
+    (``sgb.resume``), and a call that finds the file continues from it: killed and
+    started again, the run ends with the result of an uninterrupted one. The file is
+    left in place (a finished one makes the call return at once); the caller removes it
+    once the result is kept.
     """
     start = time.perf_counter()
     ts = init_state(config, seed)
+    run = {"config": repr(config), "seed": seed}
+    done = {"chunks": 0, "eval_steps": [], "eval_returns": [], "timed_steps": 0, "timed_s": 0.0}
+    done["wall_time_s"] = 0.0
+    if state_file is not None and Path(state_file).exists():
+        ts, done = resume.load(state_file, ts, run)
     chunk = max(1, config.iterations // config.num_evals)
-    eval_steps, eval_returns = [], []
-    timed_steps, timed_s = 0, 0.0
-    for i in tqdm(range(config.num_evals), desc="PPO", disable=not progress):
+    first = done["chunks"]
+    for i in tqdm(
+        range(first, config.num_evals),
+        desc="PPO",
+        initial=first,
+        total=config.num_evals,
+        disable=not progress,
+    ):
         t0 = time.perf_counter()
         ts, metrics = train_iterations(ts, config, chunk)
         _check_divergence(metrics, ts.params, i * chunk, config)
-        if i > 0 or config.num_evals == 1:
-            timed_s += time.perf_counter() - t0
-            timed_steps += chunk * config.steps_per_iteration
-        eval_steps.append((i + 1) * chunk * config.steps_per_iteration)
-        eval_returns.append(evaluate(config, ts.params, ts.normalizer, seed + 10_000 + i))
+        if i > first or config.num_evals - first == 1:
+            done["timed_s"] += time.perf_counter() - t0
+            done["timed_steps"] += chunk * config.steps_per_iteration
+        done["eval_steps"].append((i + 1) * chunk * config.steps_per_iteration)
+        done["eval_returns"].append(evaluate(config, ts.params, ts.normalizer, seed + 10_000 + i))
+        done["chunks"] = i + 1
+        if state_file is not None:
+            elapsed = done["wall_time_s"] + time.perf_counter() - start
+            resume.save(state_file, ts, run, {**done, "wall_time_s": elapsed})
     return TrainResult(
         config=config,
         params=ts.params,
         normalizer=ts.normalizer,
-        eval_steps=eval_steps,
-        eval_returns=eval_returns,
-        train_steps_per_s=timed_steps / max(timed_s, 1e-9),
-        wall_time_s=time.perf_counter() - start,
+        eval_steps=done["eval_steps"],
+        eval_returns=done["eval_returns"],
+        train_steps_per_s=done["timed_steps"] / max(done["timed_s"], 1e-9),
+        wall_time_s=done["wall_time_s"] + time.perf_counter() - start,
     )
