@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from sgb.noise import standard_normal
+from sgb.noise import normal_from_bits, standard_normal
 
 
 def test_noise_is_standard_normal():
@@ -19,6 +19,7 @@ def test_noise_is_standard_normal():
     assert stats.kstest(z, "norm").pvalue > 1e-3
     # the tails are there: about 63 draws beyond 4 sigma are expected in a million
     assert 30 < np.sum(np.abs(z) > 4) < 110
+    assert np.all(np.isfinite(z))
 
 
 def test_same_key_same_noise_and_independent_streams():
@@ -31,6 +32,13 @@ def test_same_key_same_noise_and_independent_streams():
     flat = a.ravel()
     assert abs(np.corrcoef(flat[:-1], flat[1:])[0, 1]) < limit  # neighbouring synapses
     assert abs(np.corrcoef(a[:, :-1].ravel(), a[:, 1:].ravel())[0, 1]) < limit
+
+
+def test_every_word_gives_a_finite_normal():
+    extremes = np.array([0, 1, 511, 512, 2**31, 2**32 - 513, 2**32 - 512, 2**32 - 1], np.uint32)
+    z = np.asarray(normal_from_bits(extremes))
+    assert np.all(np.isfinite(z)) and np.all(np.abs(z) < 5.5)
+    assert z[0] == -z[-1] and z[0] < -5  # symmetric, and the tails reach past 5 sigma
 
 
 def test_too_large_a_shape_is_refused():
