@@ -81,7 +81,7 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
 
 
 def test_spread_trains_and_evaluates_wider_genomes():
-    population = rl.PopulationConfig("", n_individuals=8, episodes=2, episode_length=EPISODE)
+    population = rl.PopulationConfig("", n_individuals=16, episodes=8, episode_length=EPISODE)
     config = rl_spread.SpreadConfig(
         rho_inits=(-5.0, -2.0),
         seeds=(0,),
