@@ -1,8 +1,11 @@
 """A cheap Brax environment for the PPO tests, registered as ``reach``, and its PPO settings."""
 
+from dataclasses import replace
+
 import brax.envs
 import jax
 import jax.numpy as jnp
+import pytest
 from brax.envs.base import Env, State
 
 from sgb.rl.envs import EnvSpec
@@ -10,6 +13,10 @@ from sgb.rl.networks import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 
 EPISODE = 32
+SGB_TYPES = 16
+# Tests that train SGB agents of ``reach_config(SGB_TYPES)`` run on one xdist worker
+# (``--dist loadgroup``), where they share one compiled training step.
+SHARED_STEP = pytest.mark.xdist_group("reach_sgb_step")
 
 
 class Reach(Env):
@@ -67,3 +74,12 @@ def reach_config(cell_types: int | None = None, **kwargs) -> PPOConfig:
     )
     defaults.update(kwargs)
     return PPOConfig(**defaults)
+
+
+def shared_step_config(**kwargs) -> PPOConfig:
+    """``reach_config(SGB_TYPES)`` cut to its first chunk of iterations, evaluated once: the
+    same compiled training step (same settings and chunk length); ``kwargs`` may change
+    only what the step does not read (``rho_init``, ``eval_individuals``)."""
+    full = reach_config(SGB_TYPES)
+    chunk = full.iterations // full.num_evals
+    return replace(full, total_steps=chunk * full.steps_per_iteration, num_evals=1, **kwargs)

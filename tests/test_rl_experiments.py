@@ -4,7 +4,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from reach import EPISODE, reach_config
+from reach import EPISODE, SHARED_STEP, shared_step_config
 
 from sgb.experiments import get_experiment, rl, rl_spread
 
@@ -80,12 +80,13 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
     assert wide["advantage"] == -7.5 and np.isclose(wide["sem_advantage"], 2.5)
 
 
+@SHARED_STEP
 def test_spread_trains_and_evaluates_wider_genomes():
     population = rl.PopulationConfig("", n_individuals=16, episodes=8, episode_length=EPISODE)
     config = rl_spread.SpreadConfig(
         rho_inits=(-5.0, -2.0),
         seeds=(0,),
-        ppo=reach_config(16, total_steps=2048, num_evals=1, eval_individuals=4),
+        ppo=shared_step_config(eval_individuals=4),
         population=replace(population, conditions=("normal",)),
     )
     narrow, wide = rl_spread.summarise_spread(rl_spread.spread_runs(config))

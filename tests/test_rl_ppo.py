@@ -9,7 +9,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from brax.envs.base import State
-from reach import EPISODE, SPEC, Reach, reach_config
+from reach import (
+    EPISODE,
+    SGB_TYPES,
+    SHARED_STEP,
+    SPEC,
+    Reach,
+    reach_config,
+    shared_step_config,
+)
 
 from sgb.divergence import TrainingDiverged
 from sgb.population import init_params
@@ -31,7 +39,10 @@ from sgb.rl.population import population_returns
 from sgb.rl.ppo import _unroll, gae, init_state, train, train_iterations
 
 
-@pytest.mark.parametrize(("cell_types", "threshold"), [(None, -8.0), (16, -14.0)])
+@pytest.mark.parametrize(
+    ("cell_types", "threshold"),
+    [(None, -8.0), pytest.param(SGB_TYPES, -14.0, marks=SHARED_STEP)],
+)
 def test_ppo_learns_reach(cell_types, threshold):
     result = train(reach_config(cell_types), seed=0, progress=False)
     # standing still earns about -21; SGB hidden layers with 16 types learn more slowly
@@ -158,8 +169,9 @@ def test_normalizer_matches_numpy():
     np.testing.assert_allclose(norm.m2 / (norm.count - 1), seen.var(0, ddof=1), rtol=1e-4)
 
 
+@SHARED_STEP
 def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
-    config = reach_config(4, total_steps=1024, num_evals=1)
+    config = shared_step_config()
     result = train(config, seed=0, progress=False)
     path = checkpoints.save(tmp_path / "agent.msgpack", result, {"note": "test"})
     loaded_config, params, norm, meta = checkpoints.load(path)
@@ -180,7 +192,7 @@ def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
         checkpoints.load(path)
     path.write_bytes(good)
     meta = json.loads(sidecar.read_text())
-    meta["config"]["network"]["cell_types"] = 8  # the parameters hold 4 types
+    meta["config"]["network"]["cell_types"] = 8  # the parameters hold 16 types
     sidecar.write_text(json.dumps(meta))
     with pytest.raises(ValueError, match=f"{path} does not hold the parameters"):
         checkpoints.load(path)
