@@ -1,6 +1,8 @@
 # The two commands of the README, each doing its own set-up:
 #   make book   build the book, executing every chapter at the smoke profile (_build/html)
-#   make test   ruff, the unit tests and every notebook (nbmake)
+#   make test   ruff, every notebook and the unit tests (nbmake; the chapters first, so the
+#               longest items start early on the workers; tests marked with one xdist_group
+#               run on one worker, where they share compiled programs)
 #   make reproduce EXPERIMENT=... ARGS=...   one experiment, in the same environment
 
 PYTHON ?= python3
@@ -29,7 +31,7 @@ $(STAMP): requirements.txt pyproject.toml
 test: venv
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
-	$(BIN)/python -m pytest -n $(JOBS) --nbmake --nbmake-timeout=900 tests book
+	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --nbmake --nbmake-timeout=900 book tests
 
 book: venv
 	$(BIN)/jupyter-book build . -W --keep-going

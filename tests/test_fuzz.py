@@ -51,6 +51,12 @@ def finite(tree) -> bool:
     return all(np.all(np.isfinite(np.asarray(leaf, dtype=np.float64))) for leaf in leaves)
 
 
+def compiled_once(init_and_call) -> object:
+    """``init_and_call(keys)`` on keys 0 and 1 as one jitted program: one compilation per
+    example, not one per operation (a bad argument still raises while it is traced)."""
+    return jax.jit(init_and_call)(jnp.stack([jax.random.key(0), jax.random.key(1)]))
+
+
 def draw_args(draw, valid: dict, invalid: dict) -> tuple[dict, str | None]:
     """Valid values of every argument; then, in most examples, one made invalid.
     Returns the arguments and the name of the invalid one (``None``: all valid)."""
@@ -141,8 +147,12 @@ def test_dense_layer(data):
 
     def call():
         layer = SGBDense(**args)
-        params = init_params(layer, jax.random.key(0), x)
-        return layer.apply(params, x, rngs={"sample": jax.random.key(1)}, mutable=["losses"])
+
+        def init_and_apply(keys):
+            params = init_params(layer, keys[0], x)
+            return layer.apply(params, x, rngs={"sample": keys[1]}, mutable=["losses"])
+
+        return compiled_once(init_and_apply)
 
     expect(call, bad)
 
@@ -171,16 +181,20 @@ def test_mlp_and_elbo(data):
 
     def call():
         model = SGBMLP(widths=args["widths"], cell_types=args["cell_types"], in_features=5)
-        params = init_params(model, jax.random.key(0), x)
-        return elbo_loss(
-            model,
-            params,
-            x,
-            y,
-            jax.random.key(1),
-            num_samples=args["num_samples"],
-            kl_weight=args["kl_weight"],
-        )
+
+        def init_and_loss(keys):
+            params = init_params(model, keys[0], x)
+            return elbo_loss(
+                model,
+                params,
+                x,
+                y,
+                keys[1],
+                num_samples=args["num_samples"],
+                kl_weight=args["kl_weight"],
+            )
+
+        return compiled_once(init_and_loss)
 
     expect(call, bad)
 

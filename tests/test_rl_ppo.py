@@ -1,13 +1,23 @@
 """PPO and populations on a cheap environment: learning, individuals, checkpoints, GAE."""
 
 import json
+from dataclasses import replace
 
 import brax.envs
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from brax.envs.base import Env, State
+from brax.envs.base import State
+from reach import (
+    EPISODE,
+    SGB_TYPES,
+    SHARED_STEP,
+    SPEC,
+    Reach,
+    reach_config,
+    shared_step_config,
+)
 
 from sgb.divergence import TrainingDiverged
 from sgb.population import init_params
@@ -27,73 +37,52 @@ from sgb.rl.networks import (
 )
 from sgb.rl.normalizer import init_normalizer, normalize, update
 from sgb.rl.population import population_returns
-from sgb.rl.ppo import PPOConfig, _unroll, gae, init_state, train
-
-EPISODE = 32
+from sgb.rl.ppo import _unroll, gae, init_state, train, train_iterations
 
 
-class Reach(Env):
-    """A point on a line moves by 0.1 * action per step towards a random target.
-
-    obs = (position, target - position); reward = -|target - position|.
-    Standing still earns about -32 * E|d| = -21 per episode; an optimal agent about -3.
-    """
-
-    def __init__(self, **kwargs):
-        del kwargs
-
-    def reset(self, rng: jax.Array) -> State:
-        pos, target = jax.random.uniform(rng, (2,), minval=-1.0, maxval=1.0)
-        obs = jnp.array([pos, target - pos])
-        return State(None, obs, jnp.zeros(()), jnp.zeros(()), {}, {})
-
-    def step(self, state: State, action: jax.Array) -> State:
-        pos = state.obs[0] + 0.1 * action[0]
-        target = state.obs[0] + state.obs[1]
-        obs = jnp.array([pos, target - pos])
-        return state.replace(obs=obs, reward=-jnp.abs(target - pos))
-
-    @property
-    def observation_size(self) -> int:
-        return 2
-
-    @property
-    def action_size(self) -> int:
-        return 1
-
-    @property
-    def backend(self) -> str:
-        return "none"
-
-
-brax.envs.register_environment("reach", Reach)
-SPEC = EnvSpec("reach", "none")
-
-
-def _config(cell_types=None, **kwargs):
-    defaults = dict(
-        env=SPEC,
-        network=NetworkConfig(hidden=(32, 32), cell_types=cell_types),
-        total_steps=2**15,
-        num_envs=64,
-        unroll_length=8,
-        num_minibatches=4,
-        episode_length=EPISODE,
-        reward_scaling=1.0,
-        num_evals=2,
-        eval_individuals=16,
-        kl_coef=1e-6,
-    )
-    defaults.update(kwargs)
-    return PPOConfig(**defaults)
-
-
-@pytest.mark.parametrize(("cell_types", "threshold"), [(None, -8.0), (16, -14.0)])
+@pytest.mark.parametrize(
+    ("cell_types", "threshold"),
+    [(None, -8.0), pytest.param(SGB_TYPES, -14.0, marks=SHARED_STEP)],
+)
 def test_ppo_learns_reach(cell_types, threshold):
-    result = train(_config(cell_types), seed=0, progress=False)
+    result = train(reach_config(cell_types), seed=0, progress=False)
     # standing still earns about -21; SGB hidden layers with 16 types learn more slowly
     assert result.eval_returns[-1] > threshold, result.eval_returns
     assert result.eval_steps[-1] == 2 * (2**15 // (64 * 8) // 2) * 64 * 8
+
+
+class WeakReach(Reach):
+    """Reach whose step, like Brax's Ant, returns a weakly typed ``done`` (never 1 here)."""
+
+    def step(self, state: State, action: jax.Array) -> State:
+        state = super().step(state, action)
+        return state.replace(done=jnp.where(state.reward < -10.0, 1.0, 0.0))
+
+
+brax.envs.register_environment("weak_reach", WeakReach)
+
+
+def test_the_training_step_compiles_once_for_runs_that_differ_only_outside_it():
+    # Left as they are, weakly typed leaves of the environment state would make the second
+    # chunk of iterations compile the whole training step again.
+    network = NetworkConfig(hidden=(8,), cell_types=2)
+    config = reach_config(
+        env=EnvSpec("weak_reach", "none"),
+        network=network,
+        total_steps=3 * 8 * 4,
+        num_envs=8,
+        unroll_length=4,
+        num_minibatches=2,
+        num_evals=3,
+        eval_individuals=2,
+    )
+    before = train_iterations._cache_size()
+    train(config, seed=0, progress=False)
+    assert train_iterations._cache_size() == before + 1
+    # the initial spread, the length and the evaluations of a run do not enter the step
+    wider = replace(network, rho_init=-1.0)
+    train(replace(config, network=wider, total_steps=64, num_evals=2, eval_individuals=3), 0, False)
+    assert train_iterations._cache_size() == before + 1
 
 
 def _noise(model, params, keys, obs_size):
@@ -101,7 +90,8 @@ def _noise(model, params, keys, obs_size):
 
 
 def _sgb_params(rho_init=-1.0):
-    config = _config(4, network=NetworkConfig(hidden=(32, 32), cell_types=4, rho_init=rho_init))
+    network = NetworkConfig(hidden=(32, 32), cell_types=4, rho_init=rho_init)
+    config = reach_config(4, network=network)
     return config, init_state(config, seed=3)
 
 
@@ -184,8 +174,9 @@ def test_normalizer_matches_numpy():
     np.testing.assert_allclose(norm.m2 / (norm.count - 1), seen.var(0, ddof=1), rtol=1e-4)
 
 
+@SHARED_STEP
 def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
-    config = _config(4, total_steps=1024, num_evals=1)
+    config = shared_step_config()
     result = train(config, seed=0, progress=False)
     path = checkpoints.save(tmp_path / "agent.msgpack", result, {"note": "test"})
     loaded_config, params, norm, meta = checkpoints.load(path)
@@ -206,7 +197,7 @@ def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
         checkpoints.load(path)
     path.write_bytes(good)
     meta = json.loads(sidecar.read_text())
-    meta["config"]["network"]["cell_types"] = 8  # the parameters hold 4 types
+    meta["config"]["network"]["cell_types"] = 8  # the parameters hold 16 types
     sidecar.write_text(json.dumps(meta))
     with pytest.raises(ValueError, match=f"{path} does not hold the parameters"):
         checkpoints.load(path)
@@ -214,18 +205,18 @@ def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
 
 @pytest.mark.parametrize("cell_types", [None, 4])
 def test_ppo_stops_when_training_diverges(cell_types):
-    config = _config(cell_types, learning_rate=1e30, total_steps=2048, num_evals=1)
+    config = reach_config(cell_types, learning_rate=1e30, total_steps=2048, num_evals=1)
     with pytest.raises(TrainingDiverged, match=r"at step \d+"):
         train(config, seed=0, progress=False)
 
 
 def test_bad_arguments_raise():
     with pytest.raises(ValueError, match="num_minibatches"):
-        _config(num_envs=30)
+        reach_config(num_envs=30)
     with pytest.raises(ValueError, match="cell_types"):
         NetworkConfig(hidden=(8,), cell_types=9)
     with pytest.raises(ValueError, match="registered"):
-        train(_config(env=EnvSpec("no_such_env")), progress=False)
+        train(reach_config(env=EnvSpec("no_such_env")), progress=False)
 
 
 def test_phenotype_agrees_with_the_sgb_layers():
@@ -295,12 +286,14 @@ def test_tanh_entropy_estimate_is_the_mean_negative_log_density():
     assert both(5.0)[0] < both(1.0)[0]
 
 
+@SHARED_STEP
 def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one(
     tmp_path, monkeypatch
 ):
     from sgb.rl import ppo
 
-    config = _config(4, total_steps=3 * 64 * 8, num_evals=3)
+    one_chunk = shared_step_config()
+    config = replace(one_chunk, total_steps=3 * one_chunk.total_steps, num_evals=3)
     uninterrupted = train(config, seed=2, progress=False)
     state_file = tmp_path / "run.state.npz"
     real, calls = ppo.train_iterations, []
@@ -332,14 +325,15 @@ def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one
         train(config, seed=3, progress=False, state_file=state_file)
 
 
+@SHARED_STEP
 def test_a_sweep_reuses_a_finished_run_only_with_the_same_settings(tmp_path):
     from sgb.experiments.rl import finished_run
 
-    config = _config(total_steps=2 * 64 * 8)
+    config = shared_step_config()
     result = train(config, seed=0, progress=False)
     checkpoint = checkpoints.save(tmp_path / "run.msgpack", result)
     assert finished_run(tmp_path / "missing.msgpack", config) is None
     kept = finished_run(checkpoint, config)
     assert kept["eval_returns"] == result.eval_returns
     assert kept["eval_steps"] == result.eval_steps
-    assert finished_run(checkpoint, _config(total_steps=4 * 64 * 8)) is None
+    assert finished_run(checkpoint, shared_step_config(eval_individuals=8)) is None

@@ -87,6 +87,15 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
     config = spread_config(profile)
     path = results_file(Path(out_dir) / "rl", f"spread_{env}", profile)
     start = time.perf_counter()
+    runs = spread_runs(config)
+    results = {"env": env, "runs": runs, "summary": summarise_spread(runs)}
+    record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
+    return write_results(path, results, record)
+
+
+def spread_runs(config: SpreadConfig) -> list[dict]:
+    """Train every (rho_init, seed) of ``config`` on its PPO environment and compare each
+    trained genome's individuals with its mean network: one record per run."""
     runs = []
     for rho in config.rho_inits:
         ppo = replace(config.ppo, network=replace(config.ppo.network, rho_init=rho))
@@ -106,9 +115,7 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
                     "paired_test": individuals_vs_mean(returns),
                 }
             )
-    results = {"env": env, "runs": runs, "summary": summarise_spread(runs)}
-    record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(path, results, record)
+    return runs
 
 
 PROFILES = {p: spread_config(p) for p in ("smoke", "cpu", "paper")}

@@ -9,6 +9,7 @@ the config describes, and names the file in every error.
 
 import hashlib
 import json
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -84,7 +85,8 @@ def load(path: str | Path) -> tuple[PPOConfig, Params, Normalizer, dict[str, Any
         normalizer = Normalizer(**state["normalizer"])
     except (ValueError, KeyError, TypeError) as error:
         raise ValueError(f"checkpoint {path} is unreadable: {error!r}") from error
-    _check_shapes(path, params, init_params(config, seed=0))
+    # the shapes the config describes, traced without computing (or compiling) anything
+    _check_shapes(path, params, jax.eval_shape(partial(init_params, config, seed=0)))
     params, normalizer = jax.tree_util.tree_map(jax.numpy.asarray, (params, normalizer))
     return config, params, normalizer, meta
 

@@ -7,6 +7,7 @@ episodes comes only from the random initial state. All N x episodes rollouts
 run in one jitted, vmapped call.
 """
 
+from dataclasses import replace
 from functools import partial
 
 import jax
@@ -56,6 +57,16 @@ def _returns(
     return total
 
 
+def compiled_network(network: NetworkConfig) -> NetworkConfig:
+    """``network`` as the compiled rollouts and training steps see it.
+
+    ``rho_init`` is read only when parameters are initialised, never by a step that is
+    given them, so it is set to its default: networks that differ only in their initial
+    spread share one compilation.
+    """
+    return replace(network, rho_init=NetworkConfig.rho_init)
+
+
 def _keys(n_individuals: int, episodes: int, seed: int) -> tuple[jax.Array, jax.Array]:
     if n_individuals < 1 or episodes < 1:
         raise ValueError(
@@ -91,7 +102,7 @@ def population_returns(
     ind_keys, reset_keys = _keys(n_individuals, episodes, seed)
     total = _returns(
         spec,
-        network,
+        compiled_network(network),
         actor_params,
         normalizer,
         None if mean_network else ind_keys,

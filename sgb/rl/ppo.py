@@ -30,7 +30,7 @@ The vanilla network is the special case with no sampling and no KL.
 """
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 from typing import NamedTuple
@@ -57,7 +57,7 @@ from sgb.rl.networks import (
     tanh_gaussian_log_prob,
 )
 from sgb.rl.normalizer import Normalizer, init_normalizer, normalize, update
-from sgb.rl.population import population_returns
+from sgb.rl.population import compiled_network, population_returns
 
 
 @dataclass(frozen=True)
@@ -117,6 +117,23 @@ class PPOConfig:
     @property
     def iterations(self) -> int:
         return max(1, self.total_steps // self.steps_per_iteration)
+
+
+def compiled_config(config: PPOConfig) -> PPOConfig:
+    """``config`` as the static argument of the compiled training step.
+
+    The settings that the step never reads (the initial spread ``rho_init``, used only
+    by ``init_state``, and the run's length and evaluations) are set to their defaults,
+    so runs that differ only in them share one compilation.
+    """
+    defaults = PPOConfig()
+    return replace(
+        config,
+        network=compiled_network(config.network),
+        total_steps=defaults.total_steps,
+        num_evals=defaults.num_evals,
+        eval_individuals=defaults.eval_individuals,
+    )
 
 
 class Params(NamedTuple):
@@ -313,7 +330,7 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
     zeros = [jnp.zeros((e, n_in, n_out)) for n_in, n_out in shapes]
     ts = ts._replace(actor_noise=zeros, critic_noise=list(zeros))
     actor_noise, critic_noise = jax.jit(_births, static_argnums=1)(
-        ts, config, jnp.ones(e, bool), ki
+        ts, compiled_config(config), jnp.ones(e, bool), ki
     )
     return ts._replace(actor_noise=actor_noise, critic_noise=critic_noise)
 
@@ -466,6 +483,7 @@ def train(
         ts, done = resume.load(state_file, ts, run)
     chunk = max(1, config.iterations // config.num_evals)
     first = done["chunks"]
+    step_config = compiled_config(config)
     for i in tqdm(
         range(first, config.num_evals),
         desc="PPO",
@@ -474,7 +492,7 @@ def train(
         disable=not progress,
     ):
         t0 = time.perf_counter()
-        ts, metrics = train_iterations(ts, config, chunk)
+        ts, metrics = train_iterations(ts, step_config, chunk)
         _check_divergence(metrics, ts.params, i * chunk, config)
         if i > first or config.num_evals - first == 1:
             done["timed_s"] += time.perf_counter() - t0
