@@ -190,6 +190,7 @@ def main() -> None:
     config = PPOConfig(env=EnvSpec("ant", "spring"), total_steps=args.steps, num_evals=4)
     sgb_config = replace(config, network=NetworkConfig(cell_types=64))
     done = _load(args.partial)
+    commit = git_commit()  # the code this process runs, whatever is committed meanwhile
     settings = {"ours": asdict(config), "sgb_64_types": asdict(sgb_config)}
     plan = [("brax", seed, lambda seed: brax_reference(config, seed)) for seed in args.seeds]
     plan += [("ours", seed, lambda seed: ours(config, seed)) for seed in args.seeds]
@@ -211,7 +212,7 @@ def main() -> None:
             "seed": seed,
             **run(seed),
             "bench_wall_time_s": time.perf_counter() - start,
-            "git_commit": git_commit(),
+            "git_commit": commit,
             "settings": wanted,
         }
         print(key, done[key])
