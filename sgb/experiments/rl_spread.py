@@ -1,7 +1,8 @@
 """Beyond Figure 5 (registered as ``spread``): does a wider genome beat its mean network?
 
-At the paper's initial spread (rho = -5, sigma = 0.0067) the trained Ant's individuals
-play almost exactly like the mean network (chapter 5). Here SGB agents (64 cell types)
+At our default initial spread (rho = -5, sigma = 0.0067; the authors' code starts at -7,
+sigma = 0.0009) the trained Ant's individuals play almost exactly like the mean network
+(chapter 5). Here SGB agents (64 cell types)
 are trained from several initial spreads ``rho_init``, with the Figure 3 PPO settings,
 and each trained genome's individuals are compared with its mean network on the same
 initial states, as in Figure 5.
