@@ -5,8 +5,8 @@ invalid. An invalid argument must give a ``ValueError`` or ``TypeError`` whose m
 names it; a fully valid draw must give finite output. Anything else (an error from deep
 inside jax, flax or numpy, a silent nan or inf, an invalid value accepted) fails.
 The examples are derandomised and no database is kept, so every run sees the same ones:
-130 per test, 20 for the layer and 15 for the MLP with its ELBO (Flax models compile
-for each example), 815 in all.
+130 per test, 20 for the layer and 15 for the MLP with its ELBO (each of their examples
+initialises and runs its model as one jitted program, so it compiles once), 815 in all.
 """
 
 import jax

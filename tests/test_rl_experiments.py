@@ -1,12 +1,11 @@
 """Figure 3-5 experiment logic: sweep summaries, correlations, paired tests, profiles."""
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
 from reach import EPISODE, SHARED_STEP, shared_step_config
 
 from sgb.experiments import get_experiment, rl, rl_spread
+from sgb.provenance import read_results
 
 
 def test_summary_divides_by_the_mean_vanilla_return():
@@ -81,15 +80,20 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
 
 
 @SHARED_STEP
-def test_spread_trains_and_evaluates_wider_genomes():
-    population = rl.PopulationConfig("", n_individuals=16, episodes=8, episode_length=EPISODE)
+def test_spread_run_trains_and_evaluates_wider_genomes(tmp_path, monkeypatch):
+    # the sweep on the cheap Reach environment (the Ant's smoke profile runs in CI)
+    population = rl.PopulationConfig(
+        "", n_individuals=16, episodes=8, episode_length=EPISODE, conditions=("normal",)
+    )
     config = rl_spread.SpreadConfig(
         rho_inits=(-5.0, -2.0),
         seeds=(0,),
         ppo=shared_step_config(eval_individuals=4),
-        population=replace(population, conditions=("normal",)),
+        population=population,
     )
-    narrow, wide = rl_spread.summarise_spread(rl_spread.spread_runs(config))
+    monkeypatch.setattr(rl_spread, "spread_config", lambda profile: config)
+    summary = read_results(rl_spread.run("smoke", tmp_path))["results"]["summary"]
+    narrow, wide = summary
     assert narrow["rho_init"] < wide["rho_init"]
     assert wide["sigma_trained"] > 10 * narrow["sigma_trained"]
     # wider genomes make more diverse individuals
