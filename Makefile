@@ -33,8 +33,10 @@ test: venv
 	$(BIN)/ruff format --check .
 	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --nbmake --nbmake-timeout=900 book tests
 
+# The smoke build compiles as fast as the tests do (conftest.FAST_COMPILE_FLAGS).
 book: venv
-	$(BIN)/jupyter-book build . -W --keep-going
+	XLA_FLAGS="$$($(BIN)/python -c 'import conftest, os; print(os.environ["XLA_FLAGS"])')" \
+	    $(BIN)/jupyter-book build . -W --keep-going
 
 # make reproduce EXPERIMENT=fig3 ARGS="--profile cpu --env ant"
 reproduce: venv
