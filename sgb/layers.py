@@ -114,12 +114,6 @@ def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarra
     return jnp.repeat(y, type_sizes(features, k_out), axis=-1, total_repeat_length=features)
 
 
-def weight_noise(key: jax.Array, shape: tuple[int, ...]) -> jnp.ndarray:
-    """Standard normal noise of ``shape``: one independent draw per synapse
-    (``sgb.noise.standard_normal``)."""
-    return standard_normal(key, shape)
-
-
 def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
     """An individual's full kernel from type tables ``mu``, ``rho`` (k_in, k_out, ...) and
     its ``noise`` (n_in, n_out, ...): mu + softplus(rho) * noise, each synapse from its pair."""
@@ -134,7 +128,7 @@ def sample_kernel(
     The one way to draw an individual's weights, used by these layers and by the RL
     actor-critic (``sgb.rl.networks``) alike.
     """
-    noise = weight_noise(key, shape)
+    noise = standard_normal(key, shape)
     return individual_kernel(mu, rho, noise), noise
 
 

@@ -477,8 +477,14 @@ def train(
     start = time.perf_counter()
     ts = init_state(config, seed)
     run = {"config": repr(config), "seed": seed}
-    done = {"chunks": 0, "eval_steps": [], "eval_returns": [], "timed_steps": 0, "timed_s": 0.0}
-    done["wall_time_s"] = 0.0
+    done = {
+        "chunks": 0,
+        "eval_steps": [],
+        "eval_returns": [],
+        "timed_steps": 0,
+        "timed_s": 0.0,
+        "wall_time_s": 0.0,
+    }
     if state_file is not None and Path(state_file).exists():
         ts, done = resume.load(state_file, ts, run)
     chunk = max(1, config.iterations // config.num_evals)
