@@ -1,24 +1,43 @@
 """Figure 3-5 experiment logic: sweep summaries, correlations, paired tests, profiles."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from reach import EPISODE, SHARED_STEP, shared_step_config
 
 from sgb.experiments import get_experiment, rl, rl_spread
 from sgb.provenance import read_results
+from sgb.rl.networks import NetworkConfig
 
 
 def test_summary_divides_by_the_mean_vanilla_return():
     runs = [
-        {"cell_types": None, "seed": 0, "final_return": 100.0},
-        {"cell_types": None, "seed": 1, "final_return": 300.0},
-        {"cell_types": 16, "seed": 0, "final_return": 50.0},
-        {"cell_types": 16, "seed": 1, "final_return": 150.0},
+        {"settings": "ours", "cell_types": None, "seed": 0, "final_return": 100.0},
+        {"settings": "ours", "cell_types": None, "seed": 1, "final_return": 300.0},
+        {"settings": "ours", "cell_types": 16, "seed": 0, "final_return": 50.0},
+        {"settings": "ours", "cell_types": 16, "seed": 1, "final_return": 150.0},
+        {"settings": "authors", "cell_types": 16, "seed": 0, "final_return": 400.0},
     ]
-    rows = {r["cell_types"]: r for r in rl.summarise_sweep(runs)}
-    assert rows[None]["fraction"] == pytest.approx(1.0)
-    assert rows[16]["fraction"] == pytest.approx(0.5)
-    assert rows[16]["sem_fraction"] == pytest.approx(50.0 / 200.0)  # sem of (50, 150) is 50
+    rows = {(r["settings"], r["cell_types"]): r for r in rl.summarise_sweep(runs)}
+    assert rows["ours", None]["fraction"] == pytest.approx(1.0)
+    assert rows["ours", 16]["fraction"] == pytest.approx(0.5)
+    assert rows["ours", 16]["sem_fraction"] == pytest.approx(50.0 / 200.0)  # sem(50, 150) = 50
+    assert rows["authors", 16]["fraction"] == pytest.approx(2.0)  # the one vanilla is shared
+    assert rows["authors", 16]["n_seeds"] == 1
+
+
+def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
+    config = rl.sweep_config("ant", "cpu")
+    runs = rl.sweep_runs(config)
+    assert len(runs) == len(set(runs)) == 3 * (1 + 4 * 2)
+    assert {(s, k) for s, k, _ in runs if k is None} == {("ours", None)}
+    authors = rl.with_settings(replace(config.ppo, network=NetworkConfig(cell_types=16)), "authors")
+    assert authors.kl_coef == 0.0 and authors.network.rho_init == -7.0
+    assert authors.network.all_layers_sgb and authors.network.prior == "gaussian"
+    assert rl.with_settings(config.ppo, "authors") == config.ppo  # vanilla has no genome
+    names = {rl.checkpoint_name("ant", k, seed, "cpu", s) for s, k, seed in runs}
+    assert len(names) == len(runs)
 
 
 def test_correlation_and_paired_test_on_known_populations():

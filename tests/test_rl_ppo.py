@@ -32,6 +32,7 @@ from sgb.rl.networks import (
     forward,
     individuals,
     network_kl,
+    sgb_layers,
     tanh_gaussian_entropy,
     tanh_gaussian_log_prob,
 )
@@ -85,8 +86,8 @@ def test_the_training_step_compiles_once_for_runs_that_differ_only_outside_it():
     assert train_iterations._cache_size() == before + 1
 
 
-def _noise(model, params, keys, obs_size):
-    return jax.vmap(lambda k: draw_noise(model, params, k, obs_size))(keys)
+def _noise(model, params, keys):
+    return jax.vmap(lambda k: draw_noise(model, params, k))(keys)
 
 
 def _sgb_params(rho_init=-1.0):
@@ -97,10 +98,10 @@ def _sgb_params(rho_init=-1.0):
 
 def test_same_key_same_individual_and_return():
     config, ts = _sgb_params()
-    actor = MLP(config.network, 2)
+    actor = MLP(config.network, 2, 2)
     keys = jax.random.split(jax.random.PRNGKey(0), 2)
-    a = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys, 2))
-    b = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys, 2))
+    a = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
+    b = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
     for (ka, _), (kb, _) in zip(a, b, strict=True):
         np.testing.assert_array_equal(ka, kb)
     assert not np.allclose(a[0][0][0], a[0][0][1])  # two keys, two individuals
@@ -136,7 +137,7 @@ def test_ratio_is_one_for_the_collecting_individual():
     """Rebuilding each unroll's individual from its kept noise reproduces the behaviour policy."""
     config, ts = _sgb_params()
     ts, data = _unroll(ts, config)
-    actor = MLP(config.network, 2)
+    actor = MLP(config.network, 2, 2)
     layers = individuals(actor, ts.params.actor, data.actor_noise)
     loc, scale = action_distribution(apply(layers, normalize(ts.normalizer, data.obs), True))
     np.testing.assert_allclose(tanh_gaussian_log_prob(data.u, loc, scale), data.log_prob, atol=1e-4)
@@ -222,34 +223,40 @@ def test_bad_arguments_raise():
 def test_phenotype_agrees_with_the_sgb_layers():
     """The mean network equals SGBDense's; sampled weights have each type pair's mean and std."""
     config, ts = _sgb_params(rho_init=-2.0)
-    actor = MLP(config.network, 2)
+    actor = MLP(config.network, 2, 2)
     x = jax.random.normal(jax.random.PRNGKey(5), (7, 2))
     layers = individuals(actor, ts.params.actor, None)
     expected = actor.apply(ts.params.actor, x, mean_network=True)
     np.testing.assert_allclose(apply(layers, x, False), expected, rtol=1e-5, atol=1e-6)
     keys = jax.random.split(jax.random.PRNGKey(6), 4000)
-    layers = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys, 2))
+    layers = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
     genome = ts.params.actor["params"]["hidden_1"]["genome"]
     w = np.asarray(layers[1][0])[:, :8, :8]  # the (type 0, type 0) block of the 32x32 layer
     np.testing.assert_allclose(w.mean(), genome["mu"][0, 0], atol=3e-3)
     np.testing.assert_allclose(w.std(), jax.nn.softplus(genome["rho"][0, 0]), rtol=2e-2)
 
 
-@pytest.mark.parametrize("prior", ["mixture", "gaussian"])
-def test_rl_and_layer_paths_draw_the_same_individual(prior):
+@pytest.mark.parametrize(
+    ("prior", "all_layers_sgb"), [("mixture", False), ("gaussian", False), ("gaussian", True)]
+)
+def test_rl_and_layer_paths_draw_the_same_individual(prior, all_layers_sgb):
     """From the same key, the RL phenotype has the SGB layers' kernels and outputs; the
     network's KL is the layers' (exactly for the Gaussian prior, on average over keys
     for the mixture, whose per-pair draws come from other keys)."""
-    network = NetworkConfig(hidden=(32, 16), cell_types=4, rho_init=-1.0, prior=prior)
-    actor = MLP(network, 2)
+    network = NetworkConfig(
+        hidden=(32, 16), cell_types=4, rho_init=-1.0, prior=prior, all_layers_sgb=all_layers_sgb
+    )
+    actor = MLP(network, 2, 3)
     params = init_params(actor, jax.random.PRNGKey(0), jnp.zeros((1, 3)))
     keys = jax.random.split(jax.random.PRNGKey(1), 3)
-    layers = individuals(actor, params, _noise(actor, params, keys, 3))
+    layers = individuals(actor, params, _noise(actor, params, keys))
+    names = list(sgb_layers(actor))
+    assert names == ["hidden_0", "hidden_1"] + ["out"] * all_layers_sgb
     x = jax.random.normal(jax.random.PRNGKey(2), (5, 3))
     for i, key in enumerate(keys):
         out, state = actor.apply(params, x, rngs={"sample": key}, mutable=["individual", "losses"])
-        for j in range(len(network.hidden)):
-            kernel = state["individual"][f"hidden_{j}"]["genome"]["kernel"]
+        for j, name in enumerate(names):
+            kernel = state["individual"][name]["genome"]["kernel"]
             np.testing.assert_allclose(layers[j][0][i], kernel, rtol=1e-6, atol=1e-7)
         np.testing.assert_allclose(
             forward([(k[i], b[i]) for k, b in layers], x), out, rtol=1e-5, atol=1e-6
@@ -257,7 +264,7 @@ def test_rl_and_layer_paths_draw_the_same_individual(prior):
 
     def layers_kl(key):
         _, state = actor.apply(params, x, rngs={"sample": key}, mutable=["losses"])
-        return sum(state["losses"][f"hidden_{j}"]["genome"]["kl"] for j in range(2))
+        return sum(state["losses"][name]["genome"]["kl"] for name in names)
 
     many = jax.random.split(jax.random.PRNGKey(3), 2000)
     ours = jax.vmap(lambda k: network_kl(actor, params, k))(many)
@@ -267,6 +274,22 @@ def test_rl_and_layer_paths_draw_the_same_individual(prior):
     else:
         se = np.hypot(ours.std(), theirs.std()) / np.sqrt(len(many))
         assert abs(float(ours.mean() - theirs.mean())) < 4 * se
+
+
+def test_the_authors_network_types_every_layer_and_draws_means_from_n_0_01():
+    network = NetworkConfig(
+        hidden=(64, 64), cell_types=64, all_layers_sgb=True, mean_init=0.1, rho_init=-7.0
+    )
+    params = init_params(MLP(network, 16, 27), jax.random.PRNGKey(0), jnp.zeros((1, 27)))["params"]
+    assert params["hidden_0"]["genome"]["mu"].shape == (27, 64)  # more types than inputs
+    assert params["out"]["genome"]["mu"].shape == (64, 16)  # one type per output neuron
+    mu = np.asarray(params["hidden_1"]["genome"]["mu"])
+    np.testing.assert_allclose(mu.std(), 0.1, rtol=0.05)
+    sigma = jax.nn.softplus(params["out"]["genome"]["rho"])
+    np.testing.assert_allclose(sigma, np.log1p(np.exp(-7.0)), rtol=1e-6)
+    small = replace(network, cell_types=16)
+    params = init_params(MLP(small, 16, 27), jax.random.PRNGKey(0), jnp.zeros((1, 27)))["params"]
+    assert params["hidden_0"]["genome"]["mu"].shape == (16, 16)  # 27 inputs in 16 types
 
 
 def test_tanh_entropy_estimate_is_the_mean_negative_log_density():

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sgb import stats
+from sgb import stats, validation
 from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.paths import committed_results
 from sgb.provenance import provenance, read_results, results_file, write_results
@@ -32,13 +32,37 @@ CHECKPOINT_DIR = Path("rl") / "checkpoints"
 BACKENDS = {"ant": "spring", "halfcheetah": "spring"}
 
 
+SETTINGS = ("ours", "authors")
+
+
 @dataclass(frozen=True)
 class SweepConfig:
-    """Figure 3: which cell-type counts (None = vanilla), seeds and PPO settings."""
+    """Figure 3: which cell-type counts (None = vanilla), seeds, PPO settings, and genome
+    settings (``SETTINGS``: each SGB run is trained under each; vanilla once)."""
 
     cell_types: tuple[int | None, ...]
     seeds: tuple[int, ...]
     ppo: PPOConfig
+    settings: tuple[str, ...] = ("ours",)
+
+    def __post_init__(self) -> None:
+        for name in self.settings:
+            validation.choice("settings", name, SETTINGS)
+
+
+def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
+    """``ppo`` under our genome settings (unchanged) or the authors' (their public code,
+    ``RL/custom_layers.py``, ``RL/models.py``, ``RL/configs/*.yaml``): every layer an SGB
+    layer, the observation entries and outputs typed too; type means drawn from N(0, 0.1);
+    rho_init -7 (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0 on the Ant, 1e-4 on
+    the HalfCheetah. The PPO itself stays ours (see chapter 5)."""
+    validation.choice("settings", settings, SETTINGS)
+    if settings == "ours" or not ppo.network.sgb:
+        return ppo
+    network = replace(
+        ppo.network, all_layers_sgb=True, mean_init=0.1, rho_init=-7.0, prior="gaussian"
+    )
+    return replace(ppo, network=network, kl_coef=0.0 if ppo.env.name == "ant" else 1e-4)
 
 
 @dataclass(frozen=True)
@@ -86,13 +110,29 @@ def sweep_config(env: str, profile: str) -> SweepConfig:
     cpu_types = (None, 128, 64, 32, 16) if env == "ant" else (64, None, 128, 32)
     types = {"smoke": (None, 16), "cpu": cpu_types}.get(profile, (None, 128, 64, 48, 32, 16))
     seeds = {"smoke": (0,), "cpu": (0, 1, 2)}.get(profile, (0, 1, 2, 3, 4))
-    return SweepConfig(types, seeds, _ppo(env, profile))
+    return SweepConfig(types, seeds, _ppo(env, profile), SETTINGS)
 
 
-def checkpoint_name(env: str, cell_types: int | None, seed: int, profile: str) -> str:
+def checkpoint_name(
+    env: str, cell_types: int | None, seed: int, profile: str, settings: str = "ours"
+) -> str:
     """File name of one Figure 3 run's checkpoint."""
     label = "vanilla" if cell_types is None else f"k{cell_types}"
+    if settings != "ours":
+        label += f"_{settings}"
     return f"{env}_{label}_s{seed}_{profile}.msgpack"
+
+
+def sweep_runs(config: SweepConfig) -> list[tuple[str, int | None, int]]:
+    """(settings, cell types, seed) of every run: vanilla once (it has no genome), each
+    SGB count under each settings."""
+    return [
+        (settings, k, seed)
+        for settings in config.settings
+        for k in config.cell_types
+        if k is not None or settings == config.settings[0]
+        for seed in config.seeds
+    ]
 
 
 def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
@@ -106,30 +146,31 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     path = results_file(Path(out_dir) / "rl", f"fig3_{env}", profile)
     start = time.perf_counter()
     runs = []
-    for k in config.cell_types:
-        ppo = replace(config.ppo, network=NetworkConfig(cell_types=k))
-        for seed in config.seeds:
-            checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile)
-            curve = finished_run(checkpoint, ppo)
-            if curve is None:
-                state_file = checkpoint.with_suffix(".state.npz")
-                result = train(ppo, seed=seed, state_file=state_file)
-                checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
-                state_file.unlink()
-                curve = {
-                    "eval_steps": result.eval_steps,
-                    "eval_returns": result.eval_returns,
-                    "train_steps_per_s": result.train_steps_per_s,
-                }
-            runs.append(
-                {
-                    "cell_types": k,
-                    "seed": seed,
-                    "final_return": curve["eval_returns"][-1],
-                    **curve,
-                    "checkpoint": checkpoint.name,
-                }
-            )
+    for settings, k, seed in sweep_runs(config):
+        ppo = with_settings(replace(config.ppo, network=NetworkConfig(cell_types=k)), settings)
+        name = checkpoint_name(env, k, seed, profile, settings)
+        checkpoint = Path(out_dir) / CHECKPOINT_DIR / name
+        curve = finished_run(checkpoint, ppo)
+        if curve is None:
+            state_file = checkpoint.with_suffix(".state.npz")
+            result = train(ppo, seed=seed, state_file=state_file)
+            checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
+            state_file.unlink()
+            curve = {
+                "eval_steps": result.eval_steps,
+                "eval_returns": result.eval_returns,
+                "train_steps_per_s": result.train_steps_per_s,
+            }
+        runs.append(
+            {
+                "settings": settings,
+                "cell_types": k,
+                "seed": seed,
+                "final_return": curve["eval_returns"][-1],
+                **curve,
+                "checkpoint": checkpoint.name,
+            }
+        )
     results = {"env": env, "runs": runs, "summary": summarise_sweep(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
     return write_results(path, results, record)
@@ -152,17 +193,21 @@ def seed_sem(values: np.ndarray) -> float:
 
 
 def summarise_sweep(runs: list[dict]) -> list[dict]:
-    """Per cell-type count: mean final return, SEM over seeds, fraction of vanilla and its SEM.
+    """Per settings and cell-type count: mean final return, SEM over seeds, fraction of
+    vanilla and its SEM.
 
     The fraction divides each seed's return by the mean vanilla return.
     """
     vanilla = np.mean([r["final_return"] for r in runs if r["cell_types"] is None])
     out = []
-    for k in dict.fromkeys(r["cell_types"] for r in runs):
-        values = np.array([r["final_return"] for r in runs if r["cell_types"] == k])
+    for settings, k in dict.fromkeys((r["settings"], r["cell_types"]) for r in runs):
+        values = np.array(
+            [r["final_return"] for r in runs if r["cell_types"] == k and r["settings"] == settings]
+        )
         spread = seed_sem(values)
         out.append(
             {
+                "settings": settings,
                 "cell_types": k,
                 "mean_return": float(values.mean()),
                 "sem_return": spread,

@@ -9,6 +9,7 @@ PALETTE = {
     "baseline": "#555555",
     "mean_network": "#ff7f0e",
     "individuals": "#2ca02c",
+    "authors": "#9467bd",
 }
 
 

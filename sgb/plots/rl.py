@@ -6,27 +6,39 @@ import numpy as np
 from sgb import stats
 from sgb.plots import PALETTE, subplots
 
+SETTINGS_STYLE = {
+    "ours": ("sgb", "o", "SGB, our settings"),
+    "authors": ("authors", "s", "SGB, the authors' settings"),
+}
+
 
 def plot_sweep(summary: list[dict], env: str, ax=None):
-    """Innate return as a fraction of vanilla PPO against the number of cell types (SEM bars)."""
+    """Innate return as a fraction of vanilla PPO against the number of cell types (SEM
+    bars), one line per genome settings."""
     if ax is None:
         _, ax = subplots()
-    rows = sorted(
-        (r for r in summary if r["cell_types"] is not None), key=lambda r: r["cell_types"]
-    )
-    k = [r["cell_types"] for r in rows]
-    ax.errorbar(
-        k,
-        [r["fraction"] for r in rows],
-        yerr=[r["sem_fraction"] for r in rows],
-        marker="o",
-        capsize=3,
-        color=PALETTE["sgb"],
-        label="SGB (innate, mean of individuals)",
-    )
+    types = set()
+    for settings, (color, marker, label) in SETTINGS_STYLE.items():
+        rows = sorted(
+            (r for r in summary if r["cell_types"] is not None and r["settings"] == settings),
+            key=lambda r: r["cell_types"],
+        )
+        if not rows:
+            continue
+        k = [r["cell_types"] for r in rows]
+        types.update(k)
+        ax.errorbar(
+            k,
+            [r["fraction"] for r in rows],
+            yerr=[r["sem_fraction"] for r in rows],
+            marker=marker,
+            capsize=3,
+            color=PALETTE[color],
+            label=f"{label} (innate, mean of individuals)",
+        )
     ax.axhline(1.0, color=PALETTE["baseline"], ls="--", label="vanilla PPO (width 128)")
     ax.set_xscale("log", base=2)
-    ax.set_xticks(k, [str(v) for v in k])
+    ax.set_xticks(sorted(types), [str(v) for v in sorted(types)])
     ax.set_xlabel("cell types per hidden layer")
     ax.set_ylabel("return / vanilla return")
     ax.set_title(env)

@@ -3,8 +3,10 @@
 Both networks are MLPs (swish between layers). In SGB mode the hidden layers
 are ``sgb.layers.SGBDense`` layers whose neurons fall into ``cell_types``
 types (the input layer keeps one type per observation entry) and the output
-layer is an ordinary deterministic ``nn.Dense``, as in the paper. In vanilla
-mode every layer is ``nn.Dense``.
+layer is an ordinary deterministic ``nn.Dense``, as in the paper. With
+``all_layers_sgb`` (the authors' code) the observation entries are typed too
+and the output layer is an SGB layer (``min(cell_types, n)`` types for n
+neurons). In vanilla mode every layer is ``nn.Dense``.
 
 An individual is a *phenotype*: the list of (kernel, bias) of every layer,
 drawn once from the genome with a PRNG key and then used unchanged for a whole
@@ -38,17 +40,24 @@ class NetworkConfig:
     ``cell_types=None`` is the vanilla (deterministic) network; an integer
     gives SGB hidden layers with that many cell types per hidden layer.
     ``prior`` is ``"mixture"`` (scale mixture, pi=0.5, sigma1=1, sigma2=e^-6)
-    or ``"gaussian"`` (N(0, 0.1^2)).
+    or ``"gaussian"`` (N(0, 0.1^2)). ``all_layers_sgb`` types the observation entries
+    and makes the output layer an SGB layer too. ``mean_init`` is the standard deviation
+    of the initial type means; ``None``: 1/sqrt(n_in) of each layer.
     """
 
     hidden: tuple[int, ...] = (128, 128)
     cell_types: int | None = None
     prior: str = "mixture"
     rho_init: float = -5.0
+    all_layers_sgb: bool = False
+    mean_init: float | None = None
 
     def __post_init__(self) -> None:
         validation.integers("hidden", self.hidden)
         validation.real("rho_init", self.rho_init)
+        validation.instance("all_layers_sgb", self.all_layers_sgb, bool)
+        if self.mean_init is not None:
+            validation.positive("mean_init", self.mean_init)
         if self.cell_types is not None and not (
             0 < validation.integer("cell_types", self.cell_types) <= min(self.hidden)
         ):
@@ -64,29 +73,54 @@ class NetworkConfig:
 
 
 class MLP(nn.Module):
-    """Hidden layers (SGB or dense) and a deterministic dense output layer of ``out`` units."""
+    """``in_features`` -> hidden layers (SGB or dense) -> ``out`` units (dense, or SGB
+    with ``all_layers_sgb``). Layers are named ``hidden_0``, ``hidden_1``, ... and ``out``."""
 
     config: NetworkConfig
     out: int
+    in_features: int
 
     @nn.compact
     def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
         cfg = self.config
-        prior = _prior(cfg)
-        for i, width in enumerate(cfg.hidden):
-            if cfg.sgb:
+        sgb = sgb_layers(self)
+        widths = (*cfg.hidden, self.out)
+        for i, (name, width) in enumerate(zip(layer_names(cfg), widths, strict=True)):
+            if name in sgb:
+                k_in = None if i == 0 and not cfg.all_layers_sgb else cfg.cell_types
+                n_in = x.shape[-1]
                 layer = SGBDense(
                     width,
-                    in_types=None if i == 0 else cfg.cell_types,
-                    out_types=cfg.cell_types,
-                    prior=prior,
+                    in_types=None if k_in is None else min(k_in, n_in),
+                    out_types=min(cfg.cell_types, width),
+                    prior=_prior(cfg),
+                    mean_init_std=1.0 if cfg.mean_init is None else cfg.mean_init * n_in**0.5,
                     rho_init=cfg.rho_init,
-                    name=f"hidden_{i}",
+                    name=name,
                 )
-                x = nn.swish(layer(x, mean_network))
+                x = layer(x, mean_network)
             else:
-                x = nn.swish(nn.Dense(width, name=f"hidden_{i}")(x))
-        return nn.Dense(self.out, name="out")(x)
+                x = nn.Dense(width, name=name)(x)
+            if i < len(cfg.hidden):
+                x = nn.swish(x)
+        return x
+
+
+def layer_names(config: NetworkConfig) -> list[str]:
+    """Names of the layers of an ``MLP``, input to output."""
+    return [f"hidden_{i}" for i in range(len(config.hidden))] + ["out"]
+
+
+def sgb_layers(model: MLP) -> dict[str, tuple[int, int]]:
+    """The SGB layers of ``model`` and their kernel shapes (n_in, n_out), input to output."""
+    cfg = model.config
+    if not cfg.sgb:
+        return {}
+    widths = (model.in_features, *cfg.hidden, model.out)
+    shapes = dict(zip(layer_names(cfg), zip(widths[:-1], widths[1:], strict=True), strict=True))
+    if not cfg.all_layers_sgb:
+        del shapes["out"]
+    return shapes
 
 
 def _prior(config: NetworkConfig) -> Prior:
@@ -94,8 +128,8 @@ def _prior(config: NetworkConfig) -> Prior:
     return GaussianPrior(0.1) if config.prior == "gaussian" else ScaleMixturePrior()
 
 
-def draw_noise(model: MLP, params: dict, key: jax.Array, obs_size: int) -> Noise | None:
-    """The noise of the individual drawn with ``key``: per hidden layer, shape (n_in, n_out).
+def draw_noise(model: MLP, params: dict, key: jax.Array) -> Noise | None:
+    """The noise of the individual drawn with ``key``: per SGB layer, shape (n_in, n_out).
 
     Drawn by the SGB layers themselves (``sgb.layers.sample_kernel``), so key ``k``
     gives here the individual that ``model.apply(params, x, rngs={"sample": k})`` is.
@@ -103,70 +137,66 @@ def draw_noise(model: MLP, params: dict, key: jax.Array, obs_size: int) -> Noise
     """
     if not model.config.sgb:
         return None
-    dummy = jnp.zeros((1, obs_size))
+    dummy = jnp.zeros((1, model.in_features))
     _, state = model.apply(params, dummy, rngs={"sample": key}, mutable=["individual"])
     drawn = state["individual"]
-    return [drawn[f"hidden_{i}"]["genome"]["noise"] for i in range(len(model.config.hidden))]
+    return [drawn[name]["genome"]["noise"] for name in sgb_layers(model)]
 
 
 def individuals(model: MLP, params: dict, noise: Noise | None) -> Phenotype:
     """Phenotypes from ``noise`` (``draw_noise`` vmapped: leading axis N).
 
-    Each hidden kernel is ``sgb.layers.individual_kernel(mu, rho, noise)``, differentiable
+    Each SGB kernel is ``sgb.layers.individual_kernel(mu, rho, noise)``, differentiable
     in ``params`` (reparameterised). For ``noise=None`` (vanilla networks, or the mean
     network) returns the one deterministic phenotype without a leading axis; ``apply``
     then shares it across the batch.
     """
-    cfg, p = model.config, params["params"]
-    hidden = [p[f"hidden_{i}"] for i in range(len(cfg.hidden))]
-    out = (p["out"]["kernel"], p["out"]["bias"])
-    if not cfg.sgb:
-        return [(layer["kernel"], layer["bias"]) for layer in hidden] + [out]
-    if noise is None:
-        kernels = [
-            expand_table(layer["genome"]["mu"], shape)
-            for layer, shape in zip(hidden, _kernel_shapes(model, params), strict=True)
+    p = params["params"]
+    shapes = sgb_layers(model)
+    names = layer_names(model.config)
+
+    def build(kernel_of) -> Phenotype:
+        """The phenotype whose SGB kernels are ``kernel_of(layer name, genome)``."""
+        return [
+            (
+                kernel_of(name, p[name]["genome"]) if name in shapes else p[name]["kernel"],
+                p[name]["bias"],
+            )
+            for name in names
         ]
-        return [(k, layer["bias"]) for k, layer in zip(kernels, hidden, strict=True)] + [out]
+
+    if noise is None:
+        return build(lambda name, genome: expand_table(genome["mu"], shapes[name]))
 
     def one(eps: Noise) -> Phenotype:
-        kernels = [
-            individual_kernel(layer["genome"]["mu"], layer["genome"]["rho"], e)
-            for layer, e in zip(hidden, eps, strict=True)
-        ]
-        return [(k, layer["bias"]) for k, layer in zip(kernels, hidden, strict=True)] + [out]
+        by_layer = dict(zip(shapes, eps, strict=True))
+        return build(
+            lambda name, genome: individual_kernel(genome["mu"], genome["rho"], by_layer[name])
+        )
 
     return jax.vmap(one)(noise)
 
 
 def network_kl(model: MLP, params: dict, key: jax.Array) -> jnp.ndarray:
     """KL of the network's genome to its prior, a scalar (nats): ``sgb.layers.genome_kl``
-    of every SGB hidden layer, synapses counted; 0 for vanilla networks."""
-    cfg = model.config
-    if not cfg.sgb:
+    of every SGB layer, synapses counted; 0 for vanilla networks."""
+    shapes = sgb_layers(model)
+    if not shapes:
         return jnp.zeros(())
-    prior = _prior(cfg)
-    shapes = _kernel_shapes(model, params)
+    prior = _prior(model.config)
     keys = jax.random.split(key, len(shapes))
-    genomes = [params["params"][f"hidden_{i}"]["genome"] for i in range(len(shapes))]
+    genomes = [params["params"][name]["genome"] for name in shapes]
     return sum(
         genome_kl(prior, g["mu"], jax.nn.softplus(g["rho"]), shape, "synapse", k)
-        for g, shape, k in zip(genomes, shapes, keys, strict=True)
+        for g, shape, k in zip(genomes, shapes.values(), keys, strict=True)
     )
 
 
-def _kernel_shapes(model: MLP, params: dict) -> list[tuple[int, int]]:
-    """(n_in, n_out) of each hidden kernel; the first layer has one type per input entry."""
-    cfg = model.config
-    n_obs = params["params"]["hidden_0"]["genome"]["mu"].shape[0]
-    return list(zip((n_obs, *cfg.hidden[:-1]), cfg.hidden, strict=True))
-
-
-def drawn_individuals(model: MLP, params: dict, keys: jax.Array | None, obs_size: int) -> Phenotype:
+def drawn_individuals(model: MLP, params: dict, keys: jax.Array | None) -> Phenotype:
     """``individuals`` of the keys (N, 2), one each; ``keys=None``: the mean network."""
     if keys is None:
         return individuals(model, params, None)
-    noise = jax.vmap(lambda k: draw_noise(model, params, k, obs_size))(keys)
+    noise = jax.vmap(lambda k: draw_noise(model, params, k))(keys)
     return individuals(model, params, noise)
 
 

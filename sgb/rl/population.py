@@ -38,8 +38,8 @@ def _returns(
     """Returns (N, E) for reset keys (N, E, 2): row i played by individual ``ind_keys[i]``,
     or every row by the mean network when ``ind_keys`` is None."""
     env = make_env(spec)
-    actor = MLP(network, 2 * env.action_size)
-    layers = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
+    actor = MLP(network, 2 * env.action_size, env.observation_size)
+    layers = drawn_individuals(actor, actor_params, ind_keys)
     batched = network.sgb and ind_keys is not None
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 
@@ -60,11 +60,11 @@ def _returns(
 def compiled_network(network: NetworkConfig) -> NetworkConfig:
     """``network`` as the compiled rollouts and training steps see it.
 
-    ``rho_init`` is read only when parameters are initialised, never by a step that is
-    given them, so it is set to its default: networks that differ only in their initial
-    spread share one compilation.
+    ``rho_init`` and ``mean_init`` are read only when parameters are initialised, never
+    by a step that is given them, so they are set to their defaults: networks that differ
+    only in their initialisation share one compilation.
     """
-    return replace(network, rho_init=NetworkConfig.rho_init)
+    return replace(network, rho_init=NetworkConfig.rho_init, mean_init=NetworkConfig.mean_init)
 
 
 def _keys(n_individuals: int, episodes: int, seed: int) -> tuple[jax.Array, jax.Array]:

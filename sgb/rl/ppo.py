@@ -53,6 +53,7 @@ from sgb.rl.networks import (
     draw_noise,
     individuals,
     network_kl,
+    sgb_layers,
     tanh_gaussian_entropy,
     tanh_gaussian_log_prob,
 )
@@ -148,7 +149,7 @@ class TrainState(NamedTuple):
     env_state: object
     steps: jnp.ndarray  # (E,) steps into the current episode
     finished: jnp.ndarray  # (E,) 1.0 where the episode ended
-    actor_noise: Noise | None  # per hidden layer (E, n_in, n_out), drawn at each birth
+    actor_noise: Noise | None  # per SGB layer (E, n_in, n_out), drawn at each birth
     critic_noise: Noise | None  # None for vanilla networks
     key: jax.Array
 
@@ -162,7 +163,7 @@ class Unroll(NamedTuple):
     truncation: jnp.ndarray
     valid: jnp.ndarray
     last_obs: jnp.ndarray  # (E, obs)
-    actor_noise: Noise | None  # per hidden layer (E, n_in, n_out); None for vanilla
+    actor_noise: Noise | None  # per SGB layer (E, n_in, n_out); None for vanilla
     critic_noise: Noise | None
 
 
@@ -181,7 +182,8 @@ class TrainResult:
 
 def _models(config: PPOConfig):
     env = make_env(config.env)
-    return env, MLP(config.network, 2 * env.action_size), MLP(config.network, 1)
+    n_obs = env.observation_size
+    return env, MLP(config.network, 2 * env.action_size, n_obs), MLP(config.network, 1, n_obs)
 
 
 def _births(
@@ -193,14 +195,14 @@ def _births(
     The individual born from key k has the actor of ``draw_noise(actor, ., k)`` and
     the critic of ``draw_noise(critic, ., fold_in(k, 1))``.
     """
-    env, actor, critic = _models(config)
+    _, actor, critic = _models(config)
     if not config.network.sgb:
         return None, None
 
     def draw(k: jax.Array) -> tuple[Noise, Noise]:
         return (
-            draw_noise(actor, ts.params.actor, k, env.observation_size),
-            draw_noise(critic, ts.params.critic, jax.random.fold_in(k, 1), env.observation_size),
+            draw_noise(actor, ts.params.actor, k),
+            draw_noise(critic, ts.params.critic, jax.random.fold_in(k, 1)),
         )
 
     def renew(args):
@@ -303,7 +305,7 @@ def init_params(config: PPOConfig, seed: int) -> Params:
 
 def init_state(config: PPOConfig, seed: int) -> TrainState:
     """Initial parameters, optimizer, environments and individuals for ``seed``."""
-    env, _, _ = _models(config)
+    env, actor, critic = _models(config)
     key = jax.random.PRNGKey(seed)
     key, ka, kc, kr, ki = jax.random.split(key, 5)
     params = _init_params(config, ka, kc)
@@ -324,11 +326,11 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
     )
     if not config.network.sgb:
         return ts
-    shapes = zip(
-        (env.observation_size, *config.network.hidden), config.network.hidden, strict=False
-    )
-    zeros = [jnp.zeros((e, n_in, n_out)) for n_in, n_out in shapes]
-    ts = ts._replace(actor_noise=zeros, critic_noise=list(zeros))
+
+    def zeros(model: MLP) -> Noise:
+        return [jnp.zeros((e, *shape)) for shape in sgb_layers(model).values()]
+
+    ts = ts._replace(actor_noise=zeros(actor), critic_noise=zeros(critic))
     actor_noise, critic_noise = jax.jit(_births, static_argnums=1)(
         ts, compiled_config(config), jnp.ones(e, bool), ki
     )

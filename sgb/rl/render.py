@@ -64,8 +64,8 @@ def _trajectories(
 ) -> jnp.ndarray:
     """Joint positions (N, steps + 1, nq) of N individuals from one shared initial state."""
     env = make_env(spec)
-    actor = MLP(network, 2 * env.action_size)
-    layers = drawn_individuals(actor, actor_params, ind_keys, env.observation_size)
+    actor = MLP(network, 2 * env.action_size, env.observation_size)
+    layers = drawn_individuals(actor, actor_params, ind_keys)
     n = ind_keys.shape[0]
     state = jax.vmap(env.reset)(jnp.broadcast_to(reset_key, (n, *reset_key.shape)))
 
