@@ -79,3 +79,11 @@ def paired_t(a, b) -> TestResult:
     _not_constant("a - b", a - b)
     result = scipy_stats.ttest_rel(a, b)
     return TestResult(float(result.statistic), float(result.pvalue), a.size - 1)
+
+
+def one_sample_t(values, reference: float) -> TestResult:
+    """One-sample t-test of the mean of ``values`` against a fixed ``reference``; dof = n - 1."""
+    values = _not_constant("values", _as_1d("values", values))
+    validation.real("reference", reference)
+    result = scipy_stats.ttest_1samp(values, reference)
+    return TestResult(float(result.statistic), float(result.pvalue), values.size - 1)

@@ -19,7 +19,9 @@ from reach import (
     shared_step_config,
 )
 
+from sgb import stats
 from sgb.divergence import TrainingDiverged
+from sgb.experiments.rl import PopulationConfig, authors_protocol
 from sgb.population import init_params
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec
@@ -131,6 +133,21 @@ def test_hundred_keys_give_hundred_returns():
         mean_network=True,
     )
     assert mean_net.shape == (100, 1) and not np.array_equal(mean_net, returns)
+
+
+def test_the_authors_figure_5_protocol_samples_actions():
+    config, ts = _sgb_params()
+    args = (SPEC, config.network, ts.params.actor, ts.normalizer, 6, 2, EPISODE)
+    sampled = population_returns(*args, seed=4, stochastic=True)
+    np.testing.assert_array_equal(sampled, population_returns(*args, seed=4, stochastic=True))
+    assert not np.allclose(sampled, population_returns(*args, seed=4))
+    population = PopulationConfig(
+        "", n_individuals=12, episode_length=EPISODE, sampled_episodes=3, mean_network_episodes=40
+    )
+    out = authors_protocol(config, ts.params.actor, ts.normalizer, population)
+    assert out["individuals"].shape == (12, 3) and out["mean_network"].shape == (40,)
+    expected = stats.one_sample_t(out["individuals"].mean(axis=1), out["mean_network"].mean())
+    assert out["t"] == expected.statistic and out["dof"] == 11
 
 
 def test_ratio_is_one_for_the_collecting_individual():

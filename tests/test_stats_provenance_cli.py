@@ -28,6 +28,11 @@ def test_pearson_and_paired_t_agree_with_direct_formulas():
     t = stats.paired_t(y, x)
     assert t.statistic == pytest.approx(d.mean() / (d.std(ddof=1) / np.sqrt(50)))
     assert t.p_value == pytest.approx(2 * scipy_stats.t.sf(abs(t.statistic), 49))
+    one = stats.one_sample_t(y, 0.25)
+    assert one.statistic == pytest.approx((y.mean() - 0.25) / (y.std(ddof=1) / np.sqrt(50)))
+    assert one.dof == 49 and one.p_value == pytest.approx(
+        2 * scipy_stats.t.sf(abs(one.statistic), 49)
+    )
 
 
 def test_stats_reject_bad_input():

@@ -67,7 +67,12 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
 
 @dataclass(frozen=True)
 class PopulationConfig:
-    """Figures 4 and 5: which checkpoint, how many individuals, episodes and steps."""
+    """Figures 4 and 5: which checkpoint, how many individuals, episodes and steps.
+
+    ``sampled_episodes`` and ``mean_network_episodes`` size the authors' Figure 5
+    protocol: each individual plays ``sampled_episodes`` episodes with sampled actions,
+    the mean network ``mean_network_episodes`` episodes.
+    """
 
     checkpoint: str
     n_individuals: int = 100
@@ -76,6 +81,8 @@ class PopulationConfig:
     seed: int = 0
     conditions: tuple[str, ...] = field(default=("normal", "long_legs", "slippery", "low_gravity"))
     mean_network_conditions: tuple[str, ...] = ("normal",)
+    sampled_episodes: int = 10
+    mean_network_episodes: int = 1000
 
 
 def _ppo(env: str, profile: str) -> PPOConfig:
@@ -114,12 +121,19 @@ def sweep_config(env: str, profile: str) -> SweepConfig:
 
 
 def checkpoint_name(
-    env: str, cell_types: int | None, seed: int, profile: str, settings: str = "ours"
+    env: str,
+    cell_types: int | None,
+    seed: int,
+    profile: str,
+    settings: str = "ours",
+    rho_init: float = NetworkConfig.rho_init,
 ) -> str:
-    """File name of one Figure 3 run's checkpoint."""
+    """File name of one run's checkpoint (Figure 3; ``rho_init``: the spread sweep)."""
     label = "vanilla" if cell_types is None else f"k{cell_types}"
     if settings != "ours":
         label += f"_{settings}"
+    if rho_init != NetworkConfig.rho_init:
+        label += f"_rho{rho_init:g}"
     return f"{env}_{label}_s{seed}_{profile}.msgpack"
 
 
@@ -150,17 +164,7 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
         ppo = with_settings(replace(config.ppo, network=NetworkConfig(cell_types=k)), settings)
         name = checkpoint_name(env, k, seed, profile, settings)
         checkpoint = Path(out_dir) / CHECKPOINT_DIR / name
-        curve = finished_run(checkpoint, ppo)
-        if curve is None:
-            state_file = checkpoint.with_suffix(".state.npz")
-            result = train(ppo, seed=seed, state_file=state_file)
-            checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
-            state_file.unlink()
-            curve = {
-                "eval_steps": result.eval_steps,
-                "eval_returns": result.eval_returns,
-                "train_steps_per_s": result.train_steps_per_s,
-            }
+        curve = trained_run(ppo, seed, checkpoint, profile)
         runs.append(
             {
                 "settings": settings,
@@ -174,6 +178,24 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     results = {"env": env, "runs": runs, "summary": summarise_sweep(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
     return write_results(path, results, record)
+
+
+def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str) -> dict:
+    """The learning curve of ``ppo`` trained with ``seed``, kept in ``checkpoint``: read
+    from it when it holds this run, else trained and saved there. While training, the
+    training state is kept beside it (``*.state.npz``), so a killed run continues."""
+    curve = finished_run(checkpoint, ppo)
+    if curve is not None:
+        return curve
+    state_file = checkpoint.with_suffix(".state.npz")
+    result = train(ppo, seed=seed, state_file=state_file)
+    checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
+    state_file.unlink()
+    return {
+        "eval_steps": result.eval_steps,
+        "eval_returns": result.eval_returns,
+        "train_steps_per_s": result.train_steps_per_s,
+    }
 
 
 def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
@@ -232,7 +254,14 @@ def population_config(profile: str) -> PopulationConfig:
     source = "paper" if profile == "paper" else "cpu"
     checkpoint = str(CHECKPOINT_DIR / checkpoint_name("ant", 64, 0, source))
     if profile == "smoke":
-        return PopulationConfig(checkpoint, n_individuals=8, episodes=2, episode_length=100)
+        return PopulationConfig(
+            checkpoint,
+            n_individuals=8,
+            episodes=2,
+            episode_length=100,
+            sampled_episodes=2,
+            mean_network_episodes=16,
+        )
     return PopulationConfig(checkpoint, episodes=3)
 
 
@@ -290,6 +319,43 @@ def individuals_vs_mean(returns: dict, condition: str = "normal") -> dict:
     }
 
 
+def authors_protocol(
+    ppo: PPOConfig, actor_params: dict, normalizer: Normalizer, config: PopulationConfig
+) -> dict:
+    """Figure 5 as the authors' code runs it: each individual plays ``sampled_episodes``
+    episodes and the mean network ``mean_network_episodes``, all with sampled actions and
+    independent initial states; one-sample t-test of the individuals' mean returns
+    against the mean network's mean return, taken as a fixed value."""
+    common = (ppo.env, ppo.network, actor_params, normalizer)
+    individuals = population_returns(
+        *common,
+        config.n_individuals,
+        config.sampled_episodes,
+        config.episode_length,
+        seed=config.seed + 1,
+        stochastic=True,
+    )
+    mean_network = population_returns(
+        *common,
+        config.mean_network_episodes,
+        1,
+        config.episode_length,
+        seed=config.seed + 2,
+        mean_network=True,
+        stochastic=True,
+    )[:, 0]
+    t = stats.one_sample_t(individuals.mean(axis=1), float(mean_network.mean()))
+    return {
+        "individuals": individuals,
+        "mean_network": mean_network,
+        "t": t.statistic,
+        "p": t.p_value,
+        "dof": t.dof,
+        "individuals_ci99": stats.mean_ci(individuals.mean(axis=1), 0.99),
+        "mean_network_ci99": stats.mean_ci(mean_network, 0.99),
+    }
+
+
 def fig4_config(profile: str) -> PopulationConfig:
     """Figure 4: the individuals on every condition; no mean network."""
     return replace(population_config(profile), mean_network_conditions=())
@@ -313,13 +379,17 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     config = fig4_config(profile) if figure == "fig4" else fig5_config(profile)
     path = results_file(Path(out_dir) / "rl", f"{figure}_{env}", profile)
     start = time.perf_counter()
-    returns = evaluate_conditions(config, checkpoint_root(out_dir, config.checkpoint))
+    ppo, params, normalizer, _ = checkpoints.load(
+        checkpoint_root(out_dir, config.checkpoint) / config.checkpoint
+    )
+    returns = population_on(ppo, params.actor, normalizer, config)
     results = {"returns": returns}
     if figure == "fig4":
         results["legs"] = compare(returns, "normal", "long_legs")
         results["niches"] = compare(returns, "slippery", "low_gravity")
     else:
         results["mean_network"] = individuals_vs_mean(returns)
+        results["authors_protocol"] = authors_protocol(ppo, params.actor, normalizer, config)
     record = provenance(config, profile, [config.seed], time.perf_counter() - start)
     return write_results(path, results, record)
 

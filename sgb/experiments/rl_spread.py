@@ -17,17 +17,21 @@ import numpy as np
 
 from sgb.experiments import check_profile
 from sgb.experiments.rl import (
+    CHECKPOINT_DIR,
     PopulationConfig,
+    checkpoint_name,
     individuals_vs_mean,
     population_config,
     population_on,
     seed_sem,
     sweep_config,
+    trained_run,
 )
 from sgb.layers import genome_tables
 from sgb.provenance import provenance, results_file, write_results
+from sgb.rl import checkpoints
 from sgb.rl.networks import NetworkConfig
-from sgb.rl.ppo import PPOConfig, train
+from sgb.rl.ppo import PPOConfig
 
 
 @dataclass(frozen=True)
@@ -82,34 +86,44 @@ def summarise_spread(runs: list[dict]) -> list[dict]:
 
 
 def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
-    """Train and evaluate the sweep; write ``rl/spread_<env>_<profile>.json``."""
+    """Train and evaluate the sweep; write ``rl/spread_<env>_<profile>.json``.
+
+    Each run is kept as a checkpoint in ``out_dir`` and not trained again; the runs at
+    the default spread are Figure 3's (64 cell types, our settings).
+    """
     if env != "ant":
         raise ValueError(f"env must be 'ant' for spread, got {env!r}")
     config = spread_config(profile)
     path = results_file(Path(out_dir) / "rl", f"spread_{env}", profile)
     start = time.perf_counter()
-    runs = spread_runs(config)
+    runs = spread_runs(config, profile, Path(out_dir))
     results = {"env": env, "runs": runs, "summary": summarise_spread(runs)}
     record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
     return write_results(path, results, record)
 
 
-def spread_runs(config: SpreadConfig) -> list[dict]:
-    """Train every (rho_init, seed) of ``config`` on its PPO environment and compare each
-    trained genome's individuals with its mean network: one record per run."""
+def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]:
+    """Train every (rho_init, seed) of ``config`` on its PPO environment (checkpoints in
+    ``out_dir``) and compare each trained genome's individuals with its mean network:
+    one record per run."""
     runs = []
     for rho in config.rho_inits:
         ppo = replace(config.ppo, network=replace(config.ppo.network, rho_init=rho))
+        cell_types = ppo.network.cell_types
         for seed in config.seeds:
-            result = train(ppo, seed=seed)
-            returns = population_on(ppo, result.params.actor, result.normalizer, config.population)
+            name = checkpoint_name(ppo.env.name, cell_types, seed, profile, rho_init=rho)
+            checkpoint = out_dir / CHECKPOINT_DIR / name
+            trained_run(ppo, seed, checkpoint, profile)
+            _, params, normalizer, _ = checkpoints.load(checkpoint)
+            returns = population_on(ppo, params.actor, normalizer, config.population)
             individuals = returns["normal"]["individuals"].mean(axis=1)
             runs.append(
                 {
                     "rho_init": rho,
                     "sigma_init": float(jax.nn.softplus(rho)),
                     "seed": seed,
-                    "sigma_trained": mean_sigma(result.params.actor),
+                    "checkpoint": name,
+                    "sigma_trained": mean_sigma(params.actor),
                     "individuals_mean": float(individuals.mean()),
                     "individuals_sd": float(individuals.std(ddof=1)),
                     "mean_network_mean": float(returns["normal"]["mean_network"].mean()),

@@ -1,10 +1,11 @@
 """Innate returns of a population of individuals (and of the mean network) on an environment.
 
 Every individual drawn from a trained genome plays ``episodes`` episodes on
-an environment variant with no further learning; its actions are
+an environment variant with no further learning. Its actions are
 deterministic (tanh of the Gaussian mean), so the spread of its returns over
-episodes comes only from the random initial state. All N x episodes rollouts
-run in one jitted, vmapped call.
+episodes comes only from the random initial state; with ``stochastic=True``
+they are sampled from the policy, as in training (and in the authors' Figure 5).
+All N x episodes rollouts run in one jitted, vmapped call.
 """
 
 from dataclasses import replace
@@ -34,26 +35,31 @@ def _returns(
     ind_keys: jax.Array | None,
     reset_keys: jax.Array,
     episode_length: int,
+    action_key: jax.Array | None,
 ) -> jnp.ndarray:
     """Returns (N, E) for reset keys (N, E, 2): row i played by individual ``ind_keys[i]``,
-    or every row by the mean network when ``ind_keys`` is None."""
+    or every row by the mean network when ``ind_keys`` is None. Actions are tanh of the
+    Gaussian mean, or sampled with ``action_key`` when it is given."""
     env = make_env(spec)
     actor = MLP(network, 2 * env.action_size, env.observation_size)
     layers = drawn_individuals(actor, actor_params, ind_keys)
     batched = network.sgb and ind_keys is not None
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 
-    def step(carry, _):
+    def step(carry, t):
         state, total, alive = carry
         logits = apply(layers, normalize(normalizer, state.obs), batched)
-        loc, _ = action_distribution(logits)
+        loc, scale = action_distribution(logits)
+        if action_key is not None:
+            loc = loc + scale * jax.random.normal(jax.random.fold_in(action_key, t), loc.shape)
         state = jax.vmap(jax.vmap(env.step))(state, jnp.tanh(loc))
         total = total + alive * state.reward
         alive = alive * (1.0 - state.done)
         return (state, total, alive), None
 
     zeros = jnp.zeros(reset_keys.shape[:2])
-    (_, total, _), _ = jax.lax.scan(step, (state, zeros, zeros + 1.0), None, episode_length)
+    carry = (state, zeros, zeros + 1.0)
+    (_, total, _), _ = jax.lax.scan(step, carry, jnp.arange(episode_length))
     return total
 
 
@@ -87,6 +93,7 @@ def population_returns(
     episode_length: int,
     seed: int = 0,
     mean_network: bool = False,
+    stochastic: bool = False,
 ) -> np.ndarray:
     """Innate returns, shape (n_individuals, episodes), in one jitted, vmapped call.
 
@@ -95,7 +102,8 @@ def population_returns(
     seed. The same ``seed`` gives the same individuals and initial states on
     every environment variant, so rows are comparable across variants. With
     ``mean_network=True`` the mean network plays the very same initial
-    states, row by row (for paired comparisons).
+    states, row by row (for paired comparisons). With ``stochastic=True`` actions are
+    sampled from the policy (noise from ``fold_in(PRNGKey(seed), 1)``).
     """
     if episode_length < 1:
         raise ValueError(f"episode_length must be positive, got {episode_length}")
@@ -108,5 +116,6 @@ def population_returns(
         None if mean_network else ind_keys,
         reset_keys,
         episode_length,
+        jax.random.fold_in(jax.random.PRNGKey(seed), 1) if stochastic else None,
     )
     return np.asarray(total)
