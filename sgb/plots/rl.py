@@ -50,7 +50,7 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
     """Each individual's mean return on condition ``a`` vs ``b``, SEM over episodes as bars."""
     if ax is None:
         _, ax = subplots()
-    x, y = returns[a]["individuals"], returns[b]["individuals"]
+    x, y = np.asarray(returns[a]["individuals"]), np.asarray(returns[b]["individuals"])
     ax.errorbar(
         x.mean(1),
         y.mean(1),
@@ -65,8 +65,8 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
     )
     if "mean_network" in returns[a] and "mean_network" in returns[b]:
         ax.plot(
-            returns[a]["mean_network"].mean(),
-            returns[b]["mean_network"].mean(),
+            np.mean(returns[a]["mean_network"]),
+            np.mean(returns[b]["mean_network"]),
             "*",
             ms=14,
             color=PALETTE["mean_network"],
@@ -81,11 +81,28 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
 
 
 def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
-    """Sorted mean returns of the individuals against the mean network's, with 99% CI bands."""
+    """Figure 5, our protocol: sorted mean returns of the individuals against the mean
+    network's on the same initial states, with 99% CI bands and the paired t-test."""
+    ind = np.asarray(returns[condition]["individuals"]).mean(1)
+    mean_net = np.asarray(returns[condition]["mean_network"]).mean(1)
+    t = stats.paired_t(ind, mean_net)
+    title = f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p_value:.2g}"
+    return _population_and_mean_network(ind, mean_net, title, "innate return", ax)
+
+
+def plot_authors_protocol(protocol: dict, ax=None):
+    """Figure 5, the authors' protocol (``sgb.experiments.rl.authors_protocol``): sorted
+    mean returns of the individuals (sampled actions) against the mean network's episodes,
+    with 99% CI bands and the one-sample t-test."""
+    ind = np.asarray(protocol["individuals"]).mean(1)
+    title = f"one-sample t({protocol['dof']}) = {protocol['t']:.1f}, p = {protocol['p']:.2g}"
+    mean_net = np.asarray(protocol["mean_network"])
+    return _population_and_mean_network(ind, mean_net, title, "return, sampled actions", ax)
+
+
+def _population_and_mean_network(ind, mean_net, title: str, ylabel: str, ax):
     if ax is None:
         _, ax = subplots()
-    ind = returns[condition]["individuals"].mean(1)
-    mean_net = returns[condition]["mean_network"].mean(1)
     rank = np.arange(1, ind.size + 1)
     ax.plot(rank, np.sort(ind), ".", color=PALETTE["individuals"], label="individuals (sorted)")
     for values, name in ((ind, "individuals"), (mean_net, "mean_network")):
@@ -93,11 +110,10 @@ def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
         label = "population mean" if name == "individuals" else "mean network"
         ax.axhline(mean, color=PALETTE[name], label=f"{label}, 99% CI")
         ax.axhspan(low, high, color=PALETTE[name], alpha=0.25)
-    t = stats.paired_t(ind, mean_net)
     ax.set_xlabel("individual (rank)")
-    ax.set_ylabel("innate return")
-    ax.set_title(f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p_value:.2g}")
-    ax.legend(loc="lower right")
+    ax.set_ylabel(ylabel)
+    ax.set_title(title, fontsize=9)
+    ax.legend(loc="lower right", fontsize=8)
     return ax
 
 
