@@ -4,6 +4,7 @@ Cell types are contiguous, balanced blocks of neurons. When ``n`` is not a
 multiple of ``k`` the first ``n % k`` types get one neuron more.
 """
 
+import functools
 from collections.abc import Sequence
 
 import jax
@@ -71,6 +72,14 @@ def _repeat_blocks(x: jnp.ndarray, axis: int, n: int) -> jnp.ndarray:
         part = jnp.broadcast_to(part, part.shape[: axis + 1] + (size,) + part.shape[axis + 2 :])
         parts.append(part.reshape(x.shape[:axis] + ((hi - lo) * size,) + x.shape[axis + 1 :]))
     return jnp.concatenate(parts, axis=axis)
+
+
+def sum_blocks(x: jnp.ndarray, types: Sequence[int]) -> jnp.ndarray:
+    """The transpose of ``expand_table``: (n_in, n_out, ...) -> ``types``, the sum of each
+    type-table entry's block of ``x``."""
+    expand = functools.partial(expand_table, shape=x.shape)
+    (table,) = jax.linear_transpose(expand, jax.ShapeDtypeStruct(tuple(types), x.dtype))(x)
+    return table
 
 
 def block_counts(shape: Sequence[int], types: Sequence[int]) -> np.ndarray:

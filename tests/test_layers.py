@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from sgb.celltypes import assign_cell_types, type_pair_block
+from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blocks, type_pair_block
 from sgb.compression import tree_param_count
 from sgb.elbo import elbo_loss, sown_kl
-from sgb.layers import SGBMLP, SGBConv, SGBDense, genome_kl
+from sgb.layers import SGBMLP, SGBConv, SGBDense, genome_kl, individual_kernel
 from sgb.population import (
     apply_mean_network,
     apply_population,
@@ -47,6 +47,32 @@ def test_full_bnn_limit_has_independent_parameters_per_synapse():
     np.testing.assert_array_equal(mean_kernel, genome["mu"])
     one_type = _init(SGBDense(7, in_types=1, out_types=1), jnp.ones((1, 5)))
     assert tree_param_count(one_type) == 2 + 7
+
+
+def test_individual_kernel_gradient_matches_autodiff_of_its_formula():
+    """The hand-written backward pass (noise taken back from the kernel) against JAX's
+    autodiff of mu + softplus(rho) * noise, with uneven type blocks and rho from -30 to 2."""
+    key_mu, key_rho, key_noise, key_x = jax.random.split(jax.random.key(0), 4)
+    mu = 0.1 * jax.random.normal(key_mu, (3, 4))
+    rho = jax.random.uniform(key_rho, (3, 4), minval=-8.0, maxval=2.0).at[0, 0].set(-30.0)
+    noise = jax.random.normal(key_noise, (10, 11))
+    x = jax.random.normal(key_x, (5, 10))
+
+    def plain(mu, rho, noise):
+        sigma = jax.nn.softplus(rho)
+        return expand_table(mu, noise.shape) + expand_table(sigma, noise.shape) * noise
+
+    def loss(kernel_fn, mu, rho, noise):
+        return jnp.sum(jnp.tanh(x @ kernel_fn(mu, rho, noise)) ** 2)
+
+    ours = jax.grad(loss, argnums=(1, 2, 3))(individual_kernel, mu, rho, noise)
+    reference = jax.grad(loss, argnums=(1, 2, 3))(plain, mu, rho, noise)
+    np.testing.assert_allclose(individual_kernel(mu, rho, noise), plain(mu, rho, noise), rtol=1e-6)
+    for got, want in zip(ours, reference, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-4, atol=1e-7)
+    np.testing.assert_allclose(
+        sum_blocks(jnp.ones((10, 11)), (3, 4)), block_counts((10, 11), (3, 4))
+    )
 
 
 def test_population_vmap_gives_distinct_individuals_and_keys_are_reproducible():

@@ -267,11 +267,16 @@ def population_config(profile: str) -> PopulationConfig:
     return PopulationConfig(checkpoint, episodes=3)
 
 
+def load_agent(checkpoint: Path) -> tuple[PPOConfig, dict, Normalizer]:
+    """The PPO settings, actor parameters and observation normalizer kept in ``checkpoint``."""
+    ppo, params, normalizer, _ = checkpoints.load(checkpoint)
+    return ppo, params.actor, normalizer
+
+
 def evaluate_conditions(config: PopulationConfig, results_dir: Path) -> dict:
     """Returns (N, episodes) of the individuals on every condition, and of the mean network
     (on the same initial states) on ``mean_network_conditions``."""
-    ppo, params, normalizer, _ = checkpoints.load(Path(results_dir) / config.checkpoint)
-    return population_on(ppo, params.actor, normalizer, config)
+    return population_on(*load_agent(Path(results_dir) / config.checkpoint), config)
 
 
 def population_on(
@@ -381,17 +386,15 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     config = fig4_config(profile) if figure == "fig4" else fig5_config(profile)
     path = results_file(Path(out_dir) / "rl", f"{figure}_{env}", profile)
     start = time.perf_counter()
-    ppo, params, normalizer, _ = checkpoints.load(
-        checkpoint_root(out_dir, config.checkpoint) / config.checkpoint
-    )
-    returns = population_on(ppo, params.actor, normalizer, config)
+    agent = load_agent(checkpoint_root(out_dir, config.checkpoint) / config.checkpoint)
+    returns = population_on(*agent, config)
     results = {"returns": returns}
     if figure == "fig4":
         results["legs"] = compare(returns, "normal", "long_legs")
         results["niches"] = compare(returns, "slippery", "low_gravity")
     else:
         results["mean_network"] = individuals_vs_mean(returns)
-        results["authors_protocol"] = authors_protocol(ppo, params.actor, normalizer, config)
+        results["authors_protocol"] = authors_protocol(*agent, config)
     record = provenance(config, profile, [config.seed], time.perf_counter() - start)
     return write_results(path, results, record)
 

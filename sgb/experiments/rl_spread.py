@@ -21,6 +21,7 @@ from sgb.experiments.rl import (
     PopulationConfig,
     checkpoint_name,
     individuals_vs_mean,
+    load_agent,
     population_config,
     population_on,
     seed_sem,
@@ -29,7 +30,6 @@ from sgb.experiments.rl import (
 )
 from sgb.layers import genome_tables
 from sgb.provenance import provenance, results_file, write_results
-from sgb.rl import checkpoints
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 
@@ -114,8 +114,8 @@ def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]
             name = checkpoint_name(ppo.env.name, cell_types, seed, profile, rho_init=rho)
             checkpoint = out_dir / CHECKPOINT_DIR / name
             trained_run(ppo, seed, checkpoint, profile)
-            _, params, normalizer, _ = checkpoints.load(checkpoint)
-            returns = population_on(ppo, params.actor, normalizer, config.population)
+            _, actor, normalizer = load_agent(checkpoint)
+            returns = population_on(ppo, actor, normalizer, config.population)
             individuals = returns["normal"]["individuals"].mean(axis=1)
             runs.append(
                 {
@@ -123,7 +123,7 @@ def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]
                     "sigma_init": float(jax.nn.softplus(rho)),
                     "seed": seed,
                     "checkpoint": name,
-                    "sigma_trained": mean_sigma(params.actor),
+                    "sigma_trained": mean_sigma(actor),
                     "individuals_mean": float(individuals.mean()),
                     "individuals_sd": float(individuals.std(ddof=1)),
                     "mean_network_mean": float(returns["normal"]["mean_network"].mean()),
