@@ -1,5 +1,5 @@
 """Figures of chapter 5: cell-type sweeps (Fig. 3C/D), population scatters (4E/F), mean network (5),
-the initial-spread sweep, and rendered frames of the bodies."""
+the initial-spread sweep, the HalfCheetah backends, and rendered frames of the bodies."""
 
 import numpy as np
 
@@ -136,6 +136,24 @@ def plot_spread(summary: list[dict], axes=None):
         ax.set_ylabel(label)
     axes[0].axhline(0.0, color=PALETTE["mean_network"], ls="--", label="mean network")
     axes[0].legend(loc="best", fontsize=8)
+    return axes
+
+
+def plot_backends(bench: dict, axes=None):
+    """``benchmarks/bench_backends.py``'s results: training env-steps/s per Brax backend
+    (left) and the learning curve of vanilla PPO on the fastest one (right)."""
+    if axes is None:
+        _, axes = subplots(1, 2, figsize=(10, 3.8))
+    speeds = bench["throughput"]
+    axes[0].bar(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
+    axes[0].set_xlabel("Brax backend")
+    axes[0].set_ylabel("training env-steps/s")
+    axes[0].set_title(f"{bench['env']}: vanilla PPO, {bench['throughput_steps']:,} steps")
+    reach = bench["reach"]
+    axes[1].plot(np.array(reach["eval_steps"]) / 1e6, reach["eval_returns"], marker="o")
+    axes[1].set_xlabel("training env steps (millions)")
+    axes[1].set_ylabel("evaluation return")
+    axes[1].set_title(f"vanilla PPO on {reach['backend']}")
     return axes
 
 
