@@ -5,11 +5,15 @@ network, where ``jax.random.normal`` (threefry, 20 rounds per pair of words) cos
 more than the whole training step of the plain network on a CPU. Here each synapse's
 flat index is mixed with two 32-bit words drawn from the key by murmur3's 32-bit
 finaliser, applied twice (a bijection of the index with full avalanche), and the top
-23 bits become a uniform variate strictly inside (0, 1) that the inverse error function
-turns into a normal, as ``jax.random.normal`` does (23 bits, so that every value and its
-image 2u - 1 are exact in float32: no draw rounds to 1 and becomes infinite; the normals
-reach about 5.3 sigma). Different keys give independent streams for all
-practical purposes; the noise is not meant for cryptography.
+23 bits become a uniform variate u strictly inside (0, 1) that the normal quantile
+function turns into a normal (23 bits, so that every u, 1 - u and 2u - 1 are exact in
+float32: no draw becomes infinite; the normals reach about 5.3 sigma). The quantile is
+Giles' single-precision erfinv approximation (M. Giles, "Approximating the erfinv
+function", GPU Computing Gems, 2011), the one XLA uses, with its log taken of 4u(1 - u)
+rather than log1p of -(2u - 1)^2: one cheaper logarithm, and no cancellation near the
+tails (largest relative error about 3e-7 against scipy's ``ndtri``, 6e-6 for
+``lax.erf_inv``). Different keys give independent streams for all practical purposes;
+the noise is not meant for cryptography.
 """
 
 import jax
@@ -39,8 +43,35 @@ def standard_normal(key: jax.Array, shape: tuple[int, ...]) -> jnp.ndarray:
     return normal_from_bits(hashed).reshape(shape)
 
 
+# Giles' erfinv coefficients, highest power first: the central branch (w < 5) and the tail
+_CENTRAL = (
+    2.81022636e-08, 3.43273939e-07, -3.5233877e-06, -4.39150654e-06, 0.00021858087,
+    -0.00125372503, -0.00417768164, 0.246640727, 1.50140941,
+)  # fmt: skip
+_TAIL = (
+    -0.000200214257, 0.000100950558, 0.00134934322, -0.00367342844, 0.00573950773,
+    -0.0076224613, 0.00943887047, 1.00167406, 2.83297682,
+)  # fmt: skip
+
+
 def normal_from_bits(bits: jnp.ndarray) -> jnp.ndarray:
-    """uint32 words -> float32 N(0, 1) by the inverse CDF of their top 23 bits; finite for
-    every word."""
+    """uint32 words -> float32 N(0, 1) by the normal quantile of their top 23 bits; finite
+    for every word."""
     uniform = ((bits >> 9).astype(jnp.float32) + 0.5) * 2.0**-23
-    return jnp.sqrt(2.0) * lax.erf_inv(2.0 * uniform - 1.0)
+    return normal_quantile(uniform)
+
+
+def normal_quantile(u: jnp.ndarray) -> jnp.ndarray:
+    """The standard normal quantile of float32 ``u`` in (0, 1): sqrt(2) erfinv(2u - 1)."""
+    w = -jnp.log(4.0 * u * (1.0 - u))  # = -log(1 - x^2) for x = 2u - 1
+    central = _horner(_CENTRAL, w - 2.5)
+    tail = _horner(_TAIL, jnp.sqrt(w) - 3.0)
+    return jnp.sqrt(2.0) * jnp.where(w < 5.0, central, tail) * (2.0 * u - 1.0)
+
+
+def _horner(coefficients: tuple[float, ...], t: jnp.ndarray) -> jnp.ndarray:
+    """The polynomial with ``coefficients`` (highest power first) at ``t``."""
+    p = jnp.full_like(t, coefficients[0])
+    for c in coefficients[1:]:
+        p = c + p * t
+    return p

@@ -4,9 +4,9 @@ keys and neighbouring synapses."""
 import jax
 import numpy as np
 import pytest
-from scipy import stats
+from scipy import special, stats
 
-from sgb.noise import normal_from_bits, standard_normal
+from sgb.noise import normal_from_bits, normal_quantile, standard_normal
 
 
 def test_noise_is_standard_normal():
@@ -39,6 +39,15 @@ def test_every_word_gives_a_finite_normal():
     z = np.asarray(normal_from_bits(extremes))
     assert np.all(np.isfinite(z)) and np.all(np.abs(z) < 5.5)
     assert z[0] == -z[-1] and z[0] < -5  # symmetric, and the tails reach past 5 sigma
+
+
+def test_normal_quantile_matches_scipy_on_every_tenth_grid_point():
+    """Against scipy's float64 ndtri on the 23-bit grid the noise draws from, tails
+    included."""
+    u = ((np.arange(0, 2**23, 10) + 0.5) * 2.0**-23).astype(np.float32)
+    got = np.asarray(normal_quantile(u), np.float64)
+    want = special.ndtri(u.astype(np.float64))
+    assert np.max(np.abs(got - want) / np.maximum(np.abs(want), 1e-2)) < 1e-6
 
 
 def test_too_large_a_shape_is_refused():
