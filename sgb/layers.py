@@ -127,8 +127,13 @@ def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> 
     - the gradient takes the noise back from the kernel, (kernel - mu) / sigma, instead
       of from ``noise``, which XLA would compute a second time inside the backward pass.
     """
-    sigma = jnp.log1p(jnp.exp(rho))
+    sigma = _sigma(rho)
     return expand_table(mu, noise.shape) + expand_table(sigma, noise.shape) * noise
+
+
+def _sigma(rho: jnp.ndarray) -> jnp.ndarray:
+    """softplus(rho) as log1p(exp(rho)), so XLA keeps it on the type table (see above)."""
+    return jnp.log1p(jnp.exp(rho))
 
 
 def _individual_kernel_forward(mu, rho, noise):
@@ -138,7 +143,7 @@ def _individual_kernel_forward(mu, rho, noise):
 
 def _individual_kernel_backward(residuals, grad):
     mu, rho, kernel = residuals
-    sigma = jnp.log1p(jnp.exp(rho))
+    sigma = _sigma(rho)
     # d sigma / d rho = sigmoid(rho); divided by sigma it tends to 1 as rho -> -inf
     dsigma_over_sigma = jnp.where(rho < -20.0, 1.0, jax.nn.sigmoid(rho) / sigma)
     sigma_noise = kernel - expand_table(mu, kernel.shape)
