@@ -1,5 +1,7 @@
 """The deterministic genomic bottleneck: codes, kernel generation, g-net fits, training."""
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -129,3 +131,36 @@ def test_dgb_accuracy_on_digits_rises_with_gnet_width_at_low_compression():
         accuracies.append(train_and_evaluate(config, data, progress=False)["accuracy"])
     assert accuracies[0] < accuracies[1] < accuracies[2]
     assert accuracies[2] > 0.7  # measured 0.78, against 0.17 at width 1
+
+
+def test_budget_run_killed_after_a_chunk_resumes_and_ends_as_an_uninterrupted_one(tmp_path):
+    from sgb.experiments.dgb_budget import BudgetConfig, train_with_budget
+
+    config = BudgetConfig(
+        dataset="toy",
+        ratio=2.0,
+        dgb=DGBConfig(
+            hidden=(8,),
+            rounds=4,
+            pnet_steps=2,
+            batch_size=32,
+            gnet_steps=3,
+            gnet_batch=16,
+            validation_size=40,
+        ),
+        chunk_rounds=2,
+        in_types=2,
+        out_types=2,
+    )
+    data = _toy()
+    uninterrupted = list(train_with_budget(config, data))
+    state_file = tmp_path / "run.state.npz"
+    first = next(train_with_budget(config, data, state_file))  # killed after one chunk
+    resumed = list(train_with_budget(config, data, state_file))
+    assert [r["rounds"] for r in resumed] == [2, 4] and resumed[0] == first
+    for key in ("best_validation_accuracy", "test_accuracy", "generated_test_accuracy"):
+        assert [r[key] for r in resumed] == [r[key] for r in uninterrupted]
+    np.testing.assert_allclose(resumed[-1]["fit_mse"], uninterrupted[-1]["fit_mse"], rtol=1e-6)
+    other = dataclasses.replace(config, ratio=1.5)
+    with pytest.raises(ValueError, match="another run"):
+        next(train_with_budget(other, data, state_file))

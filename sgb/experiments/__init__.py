@@ -42,6 +42,7 @@ EXPERIMENTS: dict[str, Experiment] = {
     "bbb": Experiment("bayes_by_backprop"),
     "theory": Experiment("theory"),
     "fig2": Experiment("fig2"),
+    "dgb_budget": Experiment("dgb_budget"),
     "fig3": Experiment("rl", "run_fig3", "FIG3_PROFILES"),
     "fig4": Experiment("rl", "run_fig4", "FIG4_PROFILES"),
     "fig5": Experiment("rl", "run_fig5", "FIG5_PROFILES"),

@@ -1,0 +1,146 @@
+"""The DGB at the lowest compression of Figure 2, trained for the authors' budget.
+
+Figure 2's ``cpu`` sweep trains every DGB for 100 short rounds; this experiment asks
+whether that budget, not the g-net's capacity, is what keeps the DGB below the
+uncompressed network. It trains one DGB (g-net width for ``ratio``, our convention)
+with the authors' settings (``sgb.dgb.DGBConfig`` defaults: 100 p-net minibatches of
+100 and 600 g-net steps of 1000 synapses a round, 10,000 validation images) for
+``rounds`` rounds, and after every ``chunk_rounds`` rounds records the best
+validation accuracy so far and the test accuracy of that best network (the innate
+one), and of the network the g-nets generate now.
+
+``run`` writes ``dgb_budget_<dataset>_<profile>.json`` after every chunk, atomically,
+with provenance, and keeps the training state beside it (``*.state.npz``), so a killed
+run continues where it stopped; the state file is removed when the run ends.
+"""
+
+import dataclasses
+import json
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+from tqdm.auto import tqdm
+
+from sgb import resume, validation
+from sgb.classifiers import dense_sizes, with_kernels
+from sgb.compression import CONVENTIONS, compression, setting_for_ratio
+from sgb.data import Dataset, load
+from sgb.dgb import DGB, DGBConfig, train_dgb
+from sgb.experiments import check_profile
+from sgb.provenance import _jsonable, git_commit, provenance, results_file, write_results
+from sgb.supervised import dense_accuracy
+
+
+@dataclasses.dataclass(frozen=True)
+class BudgetConfig:
+    """One DGB at compression ``ratio`` (our convention; input and output types as in
+    Figure 2's sweep, for the ratio's bookkeeping only), trained ``dgb.rounds`` rounds
+    in chunks of ``chunk_rounds``."""
+
+    dataset: str = "fashion-mnist"
+    ratio: float = 10.0
+    dgb: DGBConfig = DGBConfig(rounds=500)
+    chunk_rounds: int = 25
+    in_types: int = 30
+    out_types: int = 10
+
+    @property
+    def types(self) -> tuple[int, int]:
+        return self.in_types, self.out_types
+
+    def __post_init__(self) -> None:
+        validation.positive("ratio", self.ratio)
+        validation.instance("dgb", self.dgb, DGBConfig)
+        validation.integer("chunk_rounds", self.chunk_rounds)
+        if self.dgb.rounds % self.chunk_rounds:
+            raise ValueError(
+                f"dgb.rounds={self.dgb.rounds} must be a multiple of "
+                f"chunk_rounds={self.chunk_rounds}"
+            )
+
+
+def _generated_accuracy(dgb: DGB, state, data: Dataset) -> float:
+    """Test accuracy of the network the g-nets generate now (biases from the p-net)."""
+    params = with_kernels(state.pnet.params, dgb.generate(state.gnets))
+    return dense_accuracy(dgb.model, params, data.x_test, data.y_test)
+
+
+def train_with_budget(
+    config: BudgetConfig, data: Dataset, state_file: Path | None = None
+) -> Iterator[dict]:
+    """Yield a record after every chunk of ``config.chunk_rounds`` rounds,
+    continuing from ``state_file`` if it holds a state of this run (and saving it there
+    after every chunk). A record: ``rounds``, ``best_validation_accuracy``,
+    ``test_accuracy`` (the best network's), ``generated_test_accuracy``, ``fit_mse``."""
+    sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
+    width = setting_for_ratio("dgb", sizes, config.ratio, *config.types)
+    dgb_config = dataclasses.replace(config.dgb, gnet_width=width, rounds=config.chunk_rounds)
+    dgb = DGB(dgb_config, data.x_train.shape[1:], data.num_classes)
+    run = json.loads(json.dumps({"config": _jsonable(config), "gnet_width": width}))
+    state, progress = dgb.init(data.x_train), {"records": []}
+    if state_file is not None and state_file.exists():
+        state, progress = resume.load(state_file, state, run)
+    records = progress["records"]
+    yield from records
+    while int(state.rounds) < config.dgb.rounds:
+        start = time.perf_counter()
+        _, state, _ = train_dgb(dgb_config, data, progress=False, state=state)
+        record = {
+            "rounds": int(state.rounds),
+            "gnet_width": width,
+            "best_validation_accuracy": float(state.best_accuracy),
+            "test_accuracy": dense_accuracy(dgb.model, state.best_params, data.x_test, data.y_test),
+            "generated_test_accuracy": _generated_accuracy(dgb, state, data),
+            "fit_mse": float(state.fit_mse),
+            "wall_time_s": round(time.perf_counter() - start, 2),
+            "git_commit": git_commit(),
+        }
+        records.append(record)
+        if state_file is not None:
+            resume.save(state_file, state, run, {"records": records})
+        yield record
+
+
+PROFILES: dict[str, BudgetConfig] = {
+    "smoke": BudgetConfig(
+        dataset="digits",
+        ratio=4.0,
+        dgb=DGBConfig(
+            hidden=(64,), rounds=4, pnet_steps=5, batch_size=32, gnet_steps=5, validation_size=200
+        ),
+        chunk_rounds=2,
+    ),
+    "cpu": BudgetConfig(),
+    "paper": BudgetConfig(),
+}
+
+
+def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
+    """Train the DGB of ``profile`` and write its learning record with provenance."""
+    config = PROFILES[check_profile(profile)]
+    path = results_file(out_dir, f"dgb_budget_{config.dataset}", profile)
+    state_file = path.with_suffix(".state.npz")
+    data = load(config.dataset, seed=0)
+    sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
+    chunks = config.dgb.rounds // config.chunk_rounds
+    records = []
+    for record in tqdm(
+        train_with_budget(config, data, state_file),
+        desc=f"DGB rounds of {config.chunk_rounds}",
+        total=chunks,
+        disable=not progress,
+    ):
+        records.append(record)
+        width = record["gnet_width"]
+        ratios = {
+            f"compression_{c}": compression("dgb", sizes, width, *config.types, c)
+            for c in CONVENTIONS
+        }
+        results = {"dataset": config.dataset, "sizes": list(sizes), **ratios, "records": records}
+        wall = sum(r["wall_time_s"] for r in records)
+        record_of_run = provenance(config, profile, [config.dgb.seed], wall)
+        record_of_run["git_commits"] = sorted({r["git_commit"] for r in records})
+        write_results(path, results, record_of_run)
+    state_file.unlink(missing_ok=True)
+    return path
