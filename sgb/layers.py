@@ -116,24 +116,39 @@ def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarra
 
 @jax.custom_vjp
 def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
-    """An individual's full kernel from type tables ``mu``, ``rho`` (k_in, k_out, ...) and
-    its ``noise`` (n_in, n_out, ...): mu + softplus(rho) * noise, each synapse from its pair.
+    """Individuals' full kernels from type tables ``mu``, ``rho`` (k_in, k_out, ...) and
+    their ``noise`` (..., n_in, n_out, ...): mu + softplus(rho) * noise, each synapse from
+    its pair. Axes of ``noise`` before the table's are individuals (none for one).
 
-    Two things keep its cost near that of the noise alone (``benchmarks/bench_layers.py``):
+    Three things keep its cost near that of the noise alone (``benchmarks/bench_layers.py``):
 
     - softplus is written log1p(exp(rho)) (exact in float32 up to rho = 88), which XLA
       computes once per type pair; ``jax.nn.softplus`` also reads rho through a max that
       XLA fused into the per-synapse loop (7x slower for 784 x 800 of 30 x 100 types);
     - the gradient takes the noise back from the kernel, (kernel - mu) / sigma, instead
-      of from ``noise``, which XLA would compute a second time inside the backward pass.
+      of from ``noise``, which XLA would compute a second time inside the backward pass;
+    - the gradient sums over individuals by pairwise halving (``_sum_leading``).
     """
-    sigma = _sigma(rho)
-    return expand_table(mu, noise.shape) + expand_table(sigma, noise.shape) * noise
+    shape = noise.shape[noise.ndim - mu.ndim :]
+    return expand_table(mu, shape) + expand_table(_sigma(rho), shape) * noise
 
 
 def _sigma(rho: jnp.ndarray) -> jnp.ndarray:
     """softplus(rho) as log1p(exp(rho)), so XLA keeps it on the type table (see above)."""
     return jnp.log1p(jnp.exp(rho))
+
+
+def _sum_leading(x: jnp.ndarray, n: int) -> jnp.ndarray:
+    """``x`` summed over its first ``n`` axes, by adding halves until one is left.
+
+    XLA on CPU fuses a sum over a leading axis of a product into a slow loop (4-5x the
+    halving's time for 32 individuals of 128 x 128 before a block sum).
+    """
+    x = x.reshape((-1, *x.shape[n:]))
+    while x.shape[0] > 1:
+        half = x.shape[0] // 2
+        x = jnp.concatenate([x[:half] + x[half : 2 * half], x[2 * half :]])
+    return x[0]
 
 
 def _individual_kernel_forward(mu, rho, noise):
@@ -143,14 +158,16 @@ def _individual_kernel_forward(mu, rho, noise):
 
 def _individual_kernel_backward(residuals, grad):
     mu, rho, kernel = residuals
+    n = kernel.ndim - mu.ndim
+    shape = kernel.shape[n:]
     sigma = _sigma(rho)
     # d sigma / d rho = sigmoid(rho); divided by sigma it tends to 1 as rho -> -inf
     dsigma_over_sigma = jnp.where(rho < -20.0, 1.0, jax.nn.sigmoid(rho) / sigma)
-    sigma_noise = kernel - expand_table(mu, kernel.shape)
+    sigma_noise = kernel - expand_table(mu, shape)
     return (
-        sum_blocks(grad, mu.shape),
-        sum_blocks(grad * sigma_noise, mu.shape) * dsigma_over_sigma,
-        expand_table(sigma, kernel.shape) * grad,
+        sum_blocks(_sum_leading(grad, n), mu.shape),
+        sum_blocks(_sum_leading(grad * sigma_noise, n), mu.shape) * dsigma_over_sigma,
+        expand_table(sigma, shape) * grad,
     )
 
 

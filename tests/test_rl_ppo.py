@@ -29,7 +29,6 @@ from sgb.rl.networks import (
     MLP,
     NetworkConfig,
     action_distribution,
-    apply,
     draw_noise,
     forward,
     individuals,
@@ -156,7 +155,7 @@ def test_ratio_is_one_for_the_collecting_individual():
     ts, data = _unroll(ts, config)
     actor = MLP(config.network, 2, 2)
     layers = individuals(actor, ts.params.actor, data.actor_noise)
-    loc, scale = action_distribution(apply(layers, normalize(ts.normalizer, data.obs), True))
+    loc, scale = action_distribution(forward(layers, normalize(ts.normalizer, data.obs)))
     np.testing.assert_allclose(tanh_gaussian_log_prob(data.u, loc, scale), data.log_prob, atol=1e-4)
 
 
@@ -244,7 +243,7 @@ def test_phenotype_agrees_with_the_sgb_layers():
     x = jax.random.normal(jax.random.PRNGKey(5), (7, 2))
     layers = individuals(actor, ts.params.actor, None)
     expected = actor.apply(ts.params.actor, x, mean_network=True)
-    np.testing.assert_allclose(apply(layers, x, False), expected, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(forward(layers, x), expected, rtol=1e-5, atol=1e-6)
     keys = jax.random.split(jax.random.PRNGKey(6), 4000)
     layers = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
     genome = ts.params.actor["params"]["hidden_1"]["genome"]
@@ -276,7 +275,10 @@ def test_rl_and_layer_paths_draw_the_same_individual(prior, all_layers_sgb):
             kernel = state["individual"][name]["genome"]["kernel"]
             np.testing.assert_allclose(layers[j][0][i], kernel, rtol=1e-6, atol=1e-7)
         np.testing.assert_allclose(
-            forward([(k[i], b[i]) for k, b in layers], x), out, rtol=1e-5, atol=1e-6
+            forward([(k[i] if k.ndim == 3 else k, b) for k, b in layers], x),
+            out,
+            rtol=1e-5,
+            atol=1e-6,
         )
 
     def layers_kl(key):

@@ -12,7 +12,7 @@ An individual is a *phenotype*: the list of (kernel, bias) of every layer,
 drawn once from the genome with a PRNG key and then used unchanged for a whole
 episode. Its weight noise is drawn by the SGB layers (``draw_noise``), so a key
 gives the same individual here as in ``sgb.layers``; ``individuals`` turns noise
-into phenotypes under the current genome. ``forward`` runs a phenotype; it is
+into phenotypes under the current genome. ``forward`` runs phenotypes; it is
 the only forward pass used in training and evaluation, so the same key always
 gives the same behaviour.
 """
@@ -146,35 +146,24 @@ def draw_noise(model: MLP, params: dict, key: jax.Array) -> Noise | None:
 def individuals(model: MLP, params: dict, noise: Noise | None) -> Phenotype:
     """Phenotypes from ``noise`` (``draw_noise`` vmapped: leading axis N).
 
-    Each SGB kernel is ``sgb.layers.individual_kernel(mu, rho, noise)``, differentiable
-    in ``params`` (reparameterised). For ``noise=None`` (vanilla networks, or the mean
-    network) returns the one deterministic phenotype without a leading axis; ``apply``
-    then shares it across the batch.
+    Each SGB kernel is ``sgb.layers.individual_kernel(mu, rho, noise)``, shape
+    (N, n_in, n_out), differentiable in ``params`` (reparameterised); the other kernels
+    and the biases are shared by all N. For ``noise=None`` (vanilla networks, or the mean
+    network) returns the one deterministic phenotype, every kernel shared.
     """
     p = params["params"]
     shapes = sgb_layers(model)
-    names = layer_names(model.config)
+    by_layer = dict(zip(shapes, noise, strict=True)) if noise is not None else {}
 
-    def build(kernel_of) -> Phenotype:
-        """The phenotype whose SGB kernels are ``kernel_of(layer name, genome)``."""
-        return [
-            (
-                kernel_of(name, p[name]["genome"]) if name in shapes else p[name]["kernel"],
-                p[name]["bias"],
-            )
-            for name in names
-        ]
+    def kernel(name: str) -> jnp.ndarray:
+        if name not in shapes:
+            return p[name]["kernel"]
+        genome = p[name]["genome"]
+        if noise is None:
+            return expand_table(genome["mu"], shapes[name])
+        return individual_kernel(genome["mu"], genome["rho"], by_layer[name])
 
-    if noise is None:
-        return build(lambda name, genome: expand_table(genome["mu"], shapes[name]))
-
-    def one(eps: Noise) -> Phenotype:
-        by_layer = dict(zip(shapes, eps, strict=True))
-        return build(
-            lambda name, genome: individual_kernel(genome["mu"], genome["rho"], by_layer[name])
-        )
-
-    return jax.vmap(one)(noise)
+    return [(kernel(name), p[name]["bias"]) for name in layer_names(model.config)]
 
 
 def network_kl(model: MLP, params: dict, key: jax.Array) -> jnp.ndarray:
@@ -200,17 +189,20 @@ def drawn_individuals(model: MLP, params: dict, keys: jax.Array | None) -> Pheno
     return individuals(model, params, noise)
 
 
-def apply(layers: Phenotype, x: jnp.ndarray, batched: bool) -> jnp.ndarray:
-    """Run phenotypes on ``x`` (N, ..., n_in): one per row if ``batched``, else one shared."""
-    return jax.vmap(forward)(layers, x) if batched else forward(layers, x)
-
-
 def forward(layers: Phenotype, x: jnp.ndarray) -> jnp.ndarray:
-    """Run a phenotype on inputs ``x`` (..., n_in) -> (..., n_out)."""
-    for kernel, bias in layers[:-1]:
-        x = nn.swish(x @ kernel + bias)
-    kernel, bias = layers[-1]
-    return x @ kernel + bias
+    """Run phenotypes on inputs ``x`` (..., n_in) -> (..., n_out).
+
+    A kernel (n_in, n_out) is shared by every input; a kernel (N, n_in, n_out) holds one
+    individual per row of ``x`` (N, ..., n_in).
+    """
+    for i, (kernel, bias) in enumerate(layers):
+        if kernel.ndim == 2:
+            x = x @ kernel + bias
+        else:
+            x = jnp.einsum("n...i,nij->n...j", x, kernel) + bias
+        if i < len(layers) - 1:
+            x = nn.swish(x)
+    return x
 
 
 def action_distribution(logits: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:

@@ -20,8 +20,8 @@ from sgb.rl.networks import (
     MLP,
     NetworkConfig,
     action_distribution,
-    apply,
     drawn_individuals,
+    forward,
 )
 from sgb.rl.normalizer import Normalizer, normalize
 
@@ -43,12 +43,11 @@ def _returns(
     env = make_env(spec)
     actor = MLP(network, 2 * env.action_size, env.observation_size)
     layers = drawn_individuals(actor, actor_params, ind_keys)
-    batched = network.sgb and ind_keys is not None
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 
     def step(carry, t):
         state, total, alive = carry
-        logits = apply(layers, normalize(normalizer, state.obs), batched)
+        logits = forward(layers, normalize(normalizer, state.obs))
         loc, scale = action_distribution(logits)
         if action_key is not None:
             loc = loc + scale * jax.random.normal(jax.random.fold_in(action_key, t), loc.shape)

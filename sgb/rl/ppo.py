@@ -49,8 +49,8 @@ from sgb.rl.networks import (
     NetworkConfig,
     Noise,
     action_distribution,
-    apply,
     draw_noise,
+    forward,
     individuals,
     network_kl,
     sgb_layers,
@@ -191,7 +191,7 @@ def _births(
 ) -> tuple[Noise | None, Noise | None]:
     """Actor and critic noise with a new individual for every ``fresh`` environment.
 
-    Only newborns draw (``lax.cond`` per environment); the others keep their noise.
+    Only newborns draw, one after another; the others keep their noise.
     The individual born from key k has the actor of ``draw_noise(actor, ., k)`` and
     the critic of ``draw_noise(critic, ., fold_in(k, 1))``.
     """
@@ -205,12 +205,15 @@ def _births(
             draw_noise(critic, ts.params.critic, jax.random.fold_in(k, 1)),
         )
 
-    def renew(args):
-        born, k, old = args
-        return jax.lax.cond(born, draw, lambda _: old, k)
-
     keys = jax.random.split(key, config.num_envs)
-    return jax.lax.map(renew, (fresh, keys, (ts.actor_noise, ts.critic_noise)))
+    born = jnp.nonzero(fresh, size=config.num_envs, fill_value=0)[0]
+
+    def renew(j, noise):
+        i = born[j]
+        return jax.tree_util.tree_map(lambda n, d: n.at[i].set(d), noise, draw(keys[i]))
+
+    # in place, over the newborns only: the others cost nothing
+    return jax.lax.fori_loop(0, jnp.sum(fresh), renew, (ts.actor_noise, ts.critic_noise))
 
 
 def gae(reward, value, next_value, done, truncation, discount, lam):
@@ -245,13 +248,12 @@ def _masked_mean(x, mask):
 
 def _loss(params: Params, data: Unroll, normalizer: Normalizer, key: jax.Array, config: PPOConfig):
     _, actor, critic = _models(config)
-    sgb = config.network.sgb
     a_layers = individuals(actor, params.actor, data.actor_noise)
     c_layers = individuals(critic, params.critic, data.critic_noise)
     obs = normalize(normalizer, data.obs)
     all_obs = jnp.concatenate([obs, normalize(normalizer, data.last_obs)[:, None]], axis=1)
-    values = apply(c_layers, all_obs, sgb)[..., 0]
-    loc, scale = action_distribution(apply(a_layers, obs, sgb))
+    values = forward(c_layers, all_obs)[..., 0]
+    loc, scale = action_distribution(forward(a_layers, obs))
     log_prob = tanh_gaussian_log_prob(data.u, loc, scale)
     reward = data.reward * config.reward_scaling
     adv, target = gae(
@@ -342,21 +344,23 @@ def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
     key, k_reset, k_birth, k_act = jax.random.split(ts.key, 4)
     e = config.num_envs
     fresh = ts.finished > 0
-    resets = jax.vmap(env.reset)(jax.random.split(k_reset, e))
 
-    def pick(new, old):
-        return jnp.where(fresh.reshape((e,) + (1,) * (old.ndim - 1)), new, old)
+    def reset(env_state):
+        resets = jax.vmap(env.reset)(jax.random.split(k_reset, e))
 
-    env_state = jax.tree_util.tree_map(pick, resets, ts.env_state)
+        def pick(new, old):
+            return jnp.where(fresh.reshape((e,) + (1,) * (old.ndim - 1)), new, old)
+
+        return jax.tree_util.tree_map(pick, resets, env_state)
+
+    env_state = jax.lax.cond(jnp.any(fresh), reset, lambda env_state: env_state, ts.env_state)
     actor_noise, critic_noise = _births(ts, config, fresh, k_birth)
     steps = jnp.where(fresh, 0.0, ts.steps)
     layers = individuals(actor, ts.params.actor, actor_noise)
 
     def step(carry, k):
         state, steps, finished = carry
-        loc, scale = action_distribution(
-            apply(layers, normalize(ts.normalizer, state.obs), config.network.sgb)
-        )
+        loc, scale = action_distribution(forward(layers, normalize(ts.normalizer, state.obs)))
         u = loc + scale * jax.random.normal(k, loc.shape)
         log_prob = tanh_gaussian_log_prob(u, loc, scale)
         nstate = jax.vmap(env.step)(state, jnp.tanh(u))

@@ -16,7 +16,7 @@ from PIL import Image
 
 from sgb.rl import checkpoints
 from sgb.rl.envs import EnvSpec, make_env, variant_xml
-from sgb.rl.networks import MLP, NetworkConfig, action_distribution, apply, drawn_individuals
+from sgb.rl.networks import MLP, NetworkConfig, action_distribution, drawn_individuals, forward
 from sgb.rl.normalizer import Normalizer, normalize
 
 CAMERA = "track"  # the Ant's camera, following its centre of mass from the side
@@ -70,7 +70,7 @@ def _trajectories(
     state = jax.vmap(env.reset)(jnp.broadcast_to(reset_key, (n, *reset_key.shape)))
 
     def step(state, _):
-        logits = apply(layers, normalize(normalizer, state.obs), network.sgb)
+        logits = forward(layers, normalize(normalizer, state.obs))
         loc, _ = action_distribution(logits)
         state = jax.vmap(env.step)(state, jnp.tanh(loc))
         return state, state.pipeline_state.q
