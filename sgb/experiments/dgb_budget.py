@@ -83,6 +83,7 @@ def train_with_budget(
         state, progress = resume.load(state_file, state, run)
     records = progress["records"]
     yield from records
+    commit = git_commit()  # the code this process runs, whatever is committed meanwhile
     while int(state.rounds) < config.dgb.rounds:
         start = time.perf_counter()
         _, state, _ = train_dgb(dgb_config, data, progress=False, state=state)
@@ -94,7 +95,7 @@ def train_with_budget(
             "generated_test_accuracy": _generated_accuracy(dgb, state, data),
             "fit_mse": float(state.fit_mse),
             "wall_time_s": round(time.perf_counter() - start, 2),
-            "git_commit": git_commit(),
+            "git_commit": commit,
         }
         records.append(record)
         if state_file is not None:
