@@ -5,8 +5,9 @@
    evaluation on ``eval_individuals`` episodes on both sides), over several
    seeds: final evaluation return and training env-steps/s.
 2. SGB-PPO (64 cell types) against our vanilla PPO: env-steps/s and final return.
-   The env-steps/s ratios come from short runs of the three, back to back in one
-   sitting, so that other work on the machine during the long runs does not skew them.
+   The env-steps/s ratios come from short runs of the three, in three interleaved
+   rounds in one sitting (ratios of the medians), so that other work on the machine
+   during the long runs does not skew them.
 3. Population evaluation: env-steps/s of 100 SGB individuals evaluated in one
    vmapped call, against stepping the bare environment with random actions at
    the same batch size.
@@ -92,16 +93,24 @@ def brax_reference(config: PPOConfig, seed: int) -> dict:
     }
 
 
-def training_throughput(config: PPOConfig, sgb_config: PPOConfig, steps: int = 400_000) -> dict:
-    """Training env-steps/s of our vanilla and SGB PPO and of Brax's PPO, measured back to
-    back in one sitting (the long runs may share the machine with other work)."""
-    sps = {
-        "ours": ours(replace(config, total_steps=steps), 0)["train_steps_per_s"],
-        "brax": brax_reference(replace(config, total_steps=steps), 0)["train_steps_per_s"],
-        "sgb_64_types": ours(replace(sgb_config, total_steps=steps), 0)["train_steps_per_s"],
+def training_throughput(
+    config: PPOConfig, sgb_config: PPOConfig, steps: int = 400_000, repeats: int = 3
+) -> dict:
+    """Training env-steps/s of our vanilla and SGB PPO and of Brax's PPO, measured in
+    ``repeats`` interleaved rounds in one sitting (the long runs may share the machine
+    with other work); the ratios are of the medians."""
+    runs = {
+        "ours": lambda: ours(replace(config, total_steps=steps), 0),
+        "brax": lambda: brax_reference(replace(config, total_steps=steps), 0),
+        "sgb_64_types": lambda: ours(replace(sgb_config, total_steps=steps), 0),
     }
+    rounds = [
+        {name: run()["train_steps_per_s"] for name, run in runs.items()} for _ in range(repeats)
+    ]
+    sps = {name: float(np.median([r[name] for r in rounds])) for name in runs}
     return {
         "steps": steps,
+        "rounds": rounds,
         "steps_per_s": sps,
         "ratio_ours_to_brax": sps["ours"] / sps["brax"],
         "ratio_sgb_to_ours": sps["sgb_64_types"] / sps["ours"],
