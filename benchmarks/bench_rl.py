@@ -201,10 +201,11 @@ def main() -> None:
     done = _load(args.partial)
     commit = git_commit()  # the code this process runs, whatever is committed meanwhile
     settings = {"ours": asdict(config), "sgb_64_types": asdict(sgb_config)}
-    plan = [("brax", seed, lambda seed: brax_reference(config, seed)) for seed in args.seeds]
-    plan += [("ours", seed, lambda seed: ours(config, seed)) for seed in args.seeds]
-    plan += [("training_throughput", None, lambda _: training_throughput(config, sgb_config))]
+    # the speed ratios first, so that a sitting split with --max-runs can take them idle
+    plan = [("training_throughput", None, lambda _: training_throughput(config, sgb_config))]
     plan += [("throughput", None, lambda _: population_throughput())]
+    plan += [("brax", seed, lambda seed: brax_reference(config, seed)) for seed in args.seeds]
+    plan += [("ours", seed, lambda seed: ours(config, seed)) for seed in args.seeds]
     plan += [("sgb_64_types", seed, lambda seed: ours(sgb_config, seed)) for seed in args.sgb_seeds]
     ran, keys = 0, []
     for name, seed, run in plan:

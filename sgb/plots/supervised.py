@@ -109,3 +109,39 @@ def plot_kl_counting(ax: Axes, results: Mapping[str, Any], main_counting: str) -
     ax.set_ylabel("innate test accuracy (%)")
     ax.set_title(f"{results['dataset']}: how the KL is counted")
     ax.legend(fontsize=8)
+
+
+def plot_dgb_budget(ax: Axes, budget: Mapping[str, Any], dense: Mapping[str, list]) -> None:
+    """The DGB budget run (``sgb.experiments.dgb_budget``): innate test accuracy (%) of the
+    best-validation network and of the network generated at each record, against write-back
+    rounds; the uncompressed network's mean +- SEM over seeds (``dense``: a sweep summary
+    row) and 3 points below it."""
+    records = budget["records"]
+    rounds = [r["rounds"] for r in records]
+    ax.plot(
+        rounds,
+        [100 * r["test_accuracy"] for r in records],
+        color=PALETTE["dgb"],
+        marker="o",
+        ms=4,
+        label="DGB, best on validation (innate network)",
+    )
+    ax.plot(
+        rounds,
+        [100 * r["generated_test_accuracy"] for r in records],
+        color=PALETTE["dgb"],
+        alpha=0.5,
+        ls="--",
+        label="DGB, generated at that round",
+    )
+    base, err = 100 * dense["mean"][0], 100 * np.nan_to_num(dense["sem"][0])
+    ax.axhspan(base - err, base + err, color=PALETTE["baseline"], alpha=0.3, lw=0)
+    ax.axhline(base, color=PALETTE["baseline"], ls=":", label="uncompressed network")
+    ax.axhline(base - 3, color=PALETTE["baseline"], lw=0.8, label="3 points below it")
+    ax.set_xlabel("write-back rounds (100 p-net minibatches, 600 g-net steps each)")
+    ax.set_ylabel("innate test accuracy (%)")
+    ax.set_title(
+        f"{budget['dataset']}: DGB at {budget['compression_ours']:.0f}x "
+        f"(g-net width {records[-1]['gnet_width']})"
+    )
+    ax.legend(fontsize=8, loc="lower right")
