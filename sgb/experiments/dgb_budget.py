@@ -7,7 +7,8 @@ with the authors' settings (``sgb.dgb.DGBConfig`` defaults: 100 p-net minibatche
 100 and 600 g-net steps of 1000 synapses a round, 10,000 validation images) for
 ``rounds`` rounds, and after every ``chunk_rounds`` rounds records the best
 validation accuracy so far and the test accuracy of that best network (the innate
-one), and of the network the g-nets generate now.
+one), and of the network the g-nets generate now. The uncompressed network is then
+trained for as many minibatches as the DGB's p-net saw (``same_budget_dense``).
 
 ``run`` writes ``dgb_budget_<dataset>_<profile>.json`` after every chunk, atomically,
 with provenance, and keeps the training state beside it (``*.state.npz``), so a killed
@@ -28,8 +29,15 @@ from sgb.compression import CONVENTIONS, compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.dgb import DGB, DGBConfig, train_dgb
 from sgb.experiments import check_profile
-from sgb.provenance import _jsonable, git_commit, provenance, results_file, write_results
-from sgb.supervised import dense_accuracy
+from sgb.provenance import (
+    _jsonable,
+    git_commit,
+    provenance,
+    read_results,
+    results_file,
+    write_results,
+)
+from sgb.supervised import DenseConfig, dense_accuracy, train_and_evaluate
 
 
 @dataclasses.dataclass(frozen=True)
@@ -117,31 +125,73 @@ PROFILES: dict[str, BudgetConfig] = {
 }
 
 
+def same_budget_dense(config: BudgetConfig, data: Dataset) -> dict:
+    """The uncompressed network trained for as many minibatches as the DGB's p-net sees
+    (``rounds`` x ``pnet_steps`` of ``batch_size``, rounded to whole epochs): its test
+    accuracy, epochs, wall time and commit."""
+    steps = config.dgb.rounds * config.dgb.pnet_steps * config.dgb.batch_size
+    epochs = max(1, round(steps / len(data.x_train)))
+    dense = DenseConfig(
+        hidden=config.dgb.hidden,
+        learning_rate=config.dgb.learning_rate,
+        batch_size=config.dgb.batch_size,
+        epochs=epochs,
+        seed=config.dgb.seed,
+    )
+    start = time.perf_counter()
+    accuracy = train_and_evaluate(dense, data, progress=False)["accuracy"]
+    return {
+        "epochs": epochs,
+        "accuracy": accuracy,
+        "wall_time_s": round(time.perf_counter() - start, 2),
+        "git_commit": git_commit(),
+    }
+
+
 def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
-    """Train the DGB of ``profile`` and write its learning record with provenance."""
+    """Train the DGB of ``profile`` and the uncompressed network for the same budget, and
+    write the DGB's learning record and both accuracies with provenance. A finished part
+    is read back from the results file, not trained again."""
     config = PROFILES[check_profile(profile)]
     path = results_file(out_dir, f"dgb_budget_{config.dataset}", profile)
     state_file = path.with_suffix(".state.npz")
+    config_json = json.loads(json.dumps(_jsonable(config)))
+    results: dict = {}
+    if path.exists():
+        payload = read_results(path)
+        if payload["provenance"]["config"] != config_json:
+            raise ValueError(f"{path} holds results of another config; move it away to rerun")
+        results = payload["results"]
     data = load(config.dataset, seed=0)
     sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
     chunks = config.dgb.rounds // config.chunk_rounds
-    records = []
-    for record in tqdm(
-        train_with_budget(config, data, state_file),
-        desc=f"DGB rounds of {config.chunk_rounds}",
-        total=chunks,
-        disable=not progress,
-    ):
-        records.append(record)
-        width = record["gnet_width"]
-        ratios = {
-            f"compression_{c}": compression("dgb", sizes, width, *config.types, c)
-            for c in CONVENTIONS
-        }
-        results = {"dataset": config.dataset, "sizes": list(sizes), **ratios, "records": records}
-        wall = sum(r["wall_time_s"] for r in records)
-        record_of_run = provenance(config, profile, [config.dgb.seed], wall)
-        record_of_run["git_commits"] = sorted({r["git_commit"] for r in records})
-        write_results(path, results, record_of_run)
-    state_file.unlink(missing_ok=True)
+    if len(results.get("records", [])) < chunks:
+        records = []
+        for record in tqdm(
+            train_with_budget(config, data, state_file),
+            desc=f"DGB rounds of {config.chunk_rounds}",
+            total=chunks,
+            disable=not progress,
+        ):
+            records.append(record)
+            width = record["gnet_width"]
+            ratios = {
+                f"compression_{c}": compression("dgb", sizes, width, *config.types, c)
+                for c in CONVENTIONS
+            }
+            results = {"dataset": config.dataset, "sizes": list(sizes), **ratios}
+            results["records"] = records
+            _write(path, results, config, profile)
+        state_file.unlink(missing_ok=True)
+    if "uncompressed_same_budget" not in results:
+        results["uncompressed_same_budget"] = same_budget_dense(config, data)
+        _write(path, results, config, profile)
     return path
+
+
+def _write(path: Path, results: dict, config: BudgetConfig, profile: str) -> Path:
+    parts = results["records"] + [results.get("uncompressed_same_budget") or {}]
+    wall = sum(part.get("wall_time_s", 0.0) for part in parts)
+    record = provenance(config, profile, [config.dgb.seed], wall)
+    record["git_commits"] = sorted({part["git_commit"] for part in parts if part})
+    return write_results(path, results, record)
