@@ -8,6 +8,7 @@ It returns the state and one record per epoch of the metrics' means.
 """
 
 from collections.abc import Callable
+from functools import partial
 from typing import Any
 
 import flax.linen as nn
@@ -114,9 +115,10 @@ def fit_elbo(
     """
     if epochs < 1:
         raise ValueError(f"epochs must be >= 1, got {epochs}")
-    state = TrainState.create(apply_fn=model.apply, params=params, tx=optax.adam(learning_rate))
+    own = jax.tree_util.tree_map(jnp.copy, params)  # own buffers, so steps can donate them
+    state = TrainState.create(apply_fn=model.apply, params=own, tx=optax.adam(learning_rate))
 
-    @jax.jit
+    @partial(jax.jit, donate_argnums=0)
     def elbo_step(state: TrainState, xb, yb, key):
         def loss_fn(p):
             return elbo_loss(
