@@ -89,18 +89,21 @@ def _toy(n=96):
     return Dataset("toy", x, y, x, y, 2)
 
 
+# a DGB small enough to train in a second on ``_toy`` data
+_TINY = DGBConfig(
+    hidden=(8,),
+    rounds=3,
+    pnet_steps=2,
+    batch_size=32,
+    gnet_steps=5,
+    gnet_batch=16,
+    validation_size=40,
+)
+
+
 def test_training_state_is_explicit_and_the_innate_network_is_the_best_generated_one():
     data = _toy()
-    config = DGBConfig(
-        hidden=(8,),
-        gnet_width=4,
-        rounds=3,
-        pnet_steps=2,
-        batch_size=32,
-        gnet_steps=5,
-        gnet_batch=16,
-        validation_size=40,
-    )
+    config = dataclasses.replace(_TINY, gnet_width=4)
     dgb, state, history = train_dgb(config, data, progress=False)
     assert int(state.rounds) == 3 and len(history) >= 1
     for i, kernel in enumerate(dgb.generate(state.best_gnets)):
@@ -139,15 +142,7 @@ def test_budget_run_killed_after_a_chunk_resumes_and_ends_as_an_uninterrupted_on
     config = BudgetConfig(
         dataset="toy",
         ratio=2.0,
-        dgb=DGBConfig(
-            hidden=(8,),
-            rounds=4,
-            pnet_steps=2,
-            batch_size=32,
-            gnet_steps=3,
-            gnet_batch=16,
-            validation_size=40,
-        ),
+        dgb=dataclasses.replace(_TINY, rounds=4, gnet_steps=3),
         chunk_rounds=2,
         in_types=2,
         out_types=2,
