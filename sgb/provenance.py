@@ -129,3 +129,14 @@ def write_results(path: str | Path, results: dict[str, Any], record: dict[str, A
 def read_results(path: str | Path) -> dict[str, Any]:
     """Read a results file written by ``write_results``."""
     return json.loads(Path(path).read_text())
+
+
+def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
+    """The results an earlier run of ``config`` left in ``path`` (empty if there is no file),
+    so that a rerun continues it; a ValueError if a run of another config wrote the file."""
+    if not Path(path).exists():
+        return {}
+    payload = read_results(path)
+    if payload["provenance"]["config"] != json.loads(json.dumps(_jsonable(config))):
+        raise ValueError(f"{path} holds results of another config; move it away to run this one")
+    return payload["results"]

@@ -31,9 +31,9 @@ from sgb.dgb import DGB, DGBConfig, train_dgb
 from sgb.experiments import check_profile
 from sgb.provenance import (
     _jsonable,
+    earlier_results,
     git_commit,
     provenance,
-    read_results,
     results_file,
     write_results,
 )
@@ -68,6 +68,13 @@ class BudgetConfig:
             )
 
 
+def sizes_and_width(config: BudgetConfig, data: Dataset) -> tuple[tuple[int, ...], int]:
+    """The dense layer sizes on ``data`` and the g-net width whose compression (our
+    convention) is nearest ``config.ratio``."""
+    sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
+    return sizes, setting_for_ratio("dgb", sizes, config.ratio, *config.types)
+
+
 def _generated_accuracy(dgb: DGB, state, data: Dataset) -> float:
     """Test accuracy of the network the g-nets generate now (biases from the p-net)."""
     params = with_kernels(state.pnet.params, dgb.generate(state.gnets))
@@ -81,8 +88,7 @@ def train_with_budget(
     continuing from ``state_file`` if it holds a state of this run (and saving it there
     after every chunk). A record: ``rounds``, ``best_validation_accuracy``,
     ``test_accuracy`` (the best network's), ``generated_test_accuracy``, ``fit_mse``."""
-    sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
-    width = setting_for_ratio("dgb", sizes, config.ratio, *config.types)
+    _, width = sizes_and_width(config, data)
     dgb_config = dataclasses.replace(config.dgb, gnet_width=width, rounds=config.chunk_rounds)
     dgb = DGB(dgb_config, data.x_train.shape[1:], data.num_classes)
     run = json.loads(json.dumps({"config": _jsonable(config), "gnet_width": width}))
@@ -155,32 +161,27 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     config = PROFILES[check_profile(profile)]
     path = results_file(out_dir, f"dgb_budget_{config.dataset}", profile)
     state_file = path.with_suffix(".state.npz")
-    config_json = json.loads(json.dumps(_jsonable(config)))
-    results: dict = {}
-    if path.exists():
-        payload = read_results(path)
-        if payload["provenance"]["config"] != config_json:
-            raise ValueError(f"{path} holds results of another config; move it away to rerun")
-        results = payload["results"]
+    results = earlier_results(path, config)
     data = load(config.dataset, seed=0)
-    sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
+    sizes, width = sizes_and_width(config, data)
     chunks = config.dgb.rounds // config.chunk_rounds
     if len(results.get("records", [])) < chunks:
-        records = []
+        results = {
+            "dataset": config.dataset,
+            "sizes": list(sizes),
+            **{
+                f"compression_{c}": compression("dgb", sizes, width, *config.types, c)
+                for c in CONVENTIONS
+            },
+            "records": [],
+        }
         for record in tqdm(
             train_with_budget(config, data, state_file),
             desc=f"DGB rounds of {config.chunk_rounds}",
             total=chunks,
             disable=not progress,
         ):
-            records.append(record)
-            width = record["gnet_width"]
-            ratios = {
-                f"compression_{c}": compression("dgb", sizes, width, *config.types, c)
-                for c in CONVENTIONS
-            }
-            results = {"dataset": config.dataset, "sizes": list(sizes), **ratios}
-            results["records"] = records
+            results["records"].append(record)
             _write(path, results, config, profile)
         state_file.unlink(missing_ok=True)
     if "uncompressed_same_budget" not in results:
@@ -190,8 +191,8 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
 
 
 def _write(path: Path, results: dict, config: BudgetConfig, profile: str) -> Path:
-    parts = results["records"] + [results.get("uncompressed_same_budget") or {}]
-    wall = sum(part.get("wall_time_s", 0.0) for part in parts)
-    record = provenance(config, profile, [config.dgb.seed], wall)
-    record["git_commits"] = sorted({part["git_commit"] for part in parts if part})
+    dense = results.get("uncompressed_same_budget")
+    parts = results["records"] + ([dense] if dense else [])
+    record = provenance(config, profile, [config.dgb.seed], sum(p["wall_time_s"] for p in parts))
+    record["git_commits"] = sorted({part["git_commit"] for part in parts})
     return write_results(path, results, record)

@@ -38,9 +38,9 @@ from sgb.experiments import check_profile
 from sgb.priors import GaussianPrior
 from sgb.provenance import (
     _jsonable,
+    earlier_results,
     git_commit,
     provenance,
-    read_results,
     results_file,
     write_results,
 )
@@ -301,14 +301,7 @@ PROFILES: dict[str, dict[str, tuple[SweepConfig, SweepConfig | None]]] = {
 
 def _finished(path: Path, config: dict) -> dict[str, list[dict]]:
     """Records already in ``path`` (none if absent); an error if they came from another config."""
-    if not path.exists():
-        return {"records": [], "ablation_records": []}
-    payload = read_results(path)
-    if payload["provenance"]["config"] != config:
-        raise ValueError(
-            f"{path} holds results of another config; move it away to start a new sweep"
-        )
-    results = payload["results"]
+    results = earlier_results(path, config)
     return {k: list(results.get(k, [])) for k in ("records", "ablation_records")}
 
 
