@@ -1,4 +1,7 @@
-"""Standard normal weight noise from a counter-based hash, about 3x faster than threefry here.
+"""Standard normal noise from a counter-based hash, about 3x faster than threefry here.
+
+It draws the synapses of every individual, the Monte Carlo KL's weights and PPO's
+actions.
 
 Drawing an individual needs one normal per synapse: 1.3 million for a 784-800-800-10
 network, where ``jax.random.normal`` (threefry, 20 rounds per pair of words) costs

@@ -7,7 +7,14 @@ from scipy import integrate, stats
 from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blocks, type_pair_block
 from sgb.compression import tree_param_count
 from sgb.elbo import elbo_loss, sown_kl
-from sgb.layers import SGBMLP, SGBConv, SGBDense, genome_kl, individual_kernel
+from sgb.layers import (
+    SGBMLP,
+    SGBConv,
+    SGBDense,
+    genome_kl,
+    individual_kernel,
+    individual_matmul,
+)
 from sgb.population import (
     apply_mean_network,
     apply_population,
@@ -75,6 +82,28 @@ def test_individual_kernel_gradient_matches_autodiff_of_its_formula(individuals)
     np.testing.assert_allclose(
         sum_blocks(jnp.ones((10, 11)), (3, 4)), block_counts((10, 11), (3, 4))
     )
+
+
+@pytest.mark.parametrize("rows", [(), (6,), (2, 3)])
+def test_individual_matmul_and_its_gradient_match_the_plain_batched_product(rows):
+    """Row n of the inputs through kernel n, with none, one and two axes of rows per
+    individual: values and both gradients against autodiff of the einsum."""
+    key_x, key_k, key_w = jax.random.split(jax.random.key(1), 3)
+    x = jax.random.normal(key_x, (4, *rows, 9))
+    kernels = jax.random.normal(key_k, (4, 9, 7))
+    weights = jax.random.normal(key_w, (4, *rows, 7))
+
+    def plain(x, kernels):
+        return jnp.stack([x[n] @ kernels[n] for n in range(4)])
+
+    def loss(matmul, x, kernels):
+        return jnp.sum(jnp.tanh(matmul(x, kernels)) * weights)
+
+    np.testing.assert_allclose(individual_matmul(x, kernels), plain(x, kernels), rtol=1e-5)
+    ours = jax.jit(jax.grad(loss, argnums=(1, 2)), static_argnums=0)(individual_matmul, x, kernels)
+    reference = jax.grad(loss, argnums=(1, 2))(plain, x, kernels)
+    for got, want in zip(ours, reference, strict=True):
+        np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-6)
 
 
 def test_population_vmap_gives_distinct_individuals_and_keys_are_reproducible():

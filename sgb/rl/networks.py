@@ -25,7 +25,7 @@ import jax.numpy as jnp
 
 from sgb import validation
 from sgb.celltypes import expand_table
-from sgb.layers import SGBDense, genome_kl, individual_kernel
+from sgb.layers import SGBDense, genome_kl, individual_kernel, individual_matmul
 from sgb.priors import GaussianPrior, Prior, ScaleMixturePrior
 
 Phenotype = list[tuple[jnp.ndarray, jnp.ndarray]]
@@ -199,7 +199,7 @@ def forward(layers: Phenotype, x: jnp.ndarray) -> jnp.ndarray:
         if kernel.ndim == 2:
             x = x @ kernel + bias
         else:
-            x = jnp.einsum("n...i,nij->n...j", x, kernel) + bias
+            x = individual_matmul(x, kernel) + bias
         if i < len(layers) - 1:
             x = nn.swish(x)
     return x

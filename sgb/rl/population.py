@@ -15,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sgb.noise import standard_normal
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
     MLP,
@@ -50,7 +51,7 @@ def _returns(
         logits = forward(layers, normalize(normalizer, state.obs))
         loc, scale = action_distribution(logits)
         if action_key is not None:
-            loc = loc + scale * jax.random.normal(jax.random.fold_in(action_key, t), loc.shape)
+            loc = loc + scale * standard_normal(jax.random.fold_in(action_key, t), loc.shape)
         state = jax.vmap(jax.vmap(env.step))(state, jnp.tanh(loc))
         total = total + alive * state.reward
         alive = alive * (1.0 - state.done)

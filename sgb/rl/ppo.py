@@ -43,6 +43,7 @@ from tqdm.auto import tqdm
 
 from sgb import resume, validation
 from sgb.divergence import check_loss, check_params
+from sgb.noise import standard_normal
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
     MLP,
@@ -273,7 +274,7 @@ def _loss(params: Params, data: Unroll, normalizer: Normalizer, key: jax.Array, 
     policy_loss = -_masked_mean(jnp.minimum(ratio * adv, clipped * adv), data.valid)
     value_loss = 0.5 * _masked_mean((values[:, :-1] - target) ** 2, data.valid)
     k_entropy, k_actor, k_critic = jax.random.split(key, 3)
-    u = loc + scale * jax.random.normal(k_entropy, loc.shape)  # reparameterised, for the entropy
+    u = loc + scale * standard_normal(k_entropy, loc.shape)  # reparameterised, for the entropy
     entropy = _masked_mean(tanh_gaussian_entropy(scale, u), data.valid)
     kl = network_kl(actor, params.actor, k_actor) + network_kl(critic, params.critic, k_critic)
     total = (
@@ -361,7 +362,7 @@ def _unroll(ts: TrainState, config: PPOConfig) -> tuple[TrainState, Unroll]:
     def step(carry, k):
         state, steps, finished = carry
         loc, scale = action_distribution(forward(layers, normalize(ts.normalizer, state.obs)))
-        u = loc + scale * jax.random.normal(k, loc.shape)
+        u = loc + scale * standard_normal(k, loc.shape)
         log_prob = tanh_gaussian_log_prob(u, loc, scale)
         nstate = jax.vmap(env.step)(state, jnp.tanh(u))
         steps = steps + 1.0
