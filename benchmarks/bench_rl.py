@@ -5,9 +5,10 @@
    evaluation on ``eval_individuals`` episodes on both sides), over several
    seeds: final evaluation return and training env-steps/s.
 2. SGB-PPO (64 cell types) against our vanilla PPO: env-steps/s and final return.
-   The env-steps/s ratios come from short runs of the three, in three interleaved
-   rounds in one sitting (ratios of the medians), so that other work on the machine
-   during the long runs does not skew them.
+   The env-steps/s ratios come from the three trained side by side in one sitting:
+   after each of Brax's training epochs, ours and SGB's train as many iterations, so
+   each round's three rates meet the machine in the same state (medians of the
+   per-round ratios; work on the machine during the long runs does not enter them).
 3. Population evaluation: env-steps/s of 100 SGB individuals evaluated in one
    vmapped call, against stepping the bare environment with random actions at
    the same batch size.
@@ -38,7 +39,7 @@ from sgb.provenance import atomic_write, git_commit, provenance, write_results
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.population import population_returns
-from sgb.rl.ppo import PPOConfig, init_state, train
+from sgb.rl.ppo import PPOConfig, compiled_config, init_state, train, train_iterations
 
 
 def ours(config: PPOConfig, seed: int) -> dict:
@@ -51,9 +52,16 @@ def ours(config: PPOConfig, seed: int) -> dict:
     }
 
 
-def brax_reference(config: PPOConfig, seed: int) -> dict:
-    """Brax's PPO with the same settings (one unroll per environment per update, as ours)."""
+def brax_reference(config: PPOConfig, seed: int, after_epoch=None) -> dict:
+    """Brax's PPO with the same settings (one unroll per environment per update, as ours);
+    ``after_epoch(step, metrics)``, if given, is called after each evaluation."""
     reports = []
+
+    def progress(step: int, metrics: dict) -> None:
+        reports.append((step, dict(metrics)))
+        if after_epoch is not None:
+            after_epoch(step, metrics)
+
     start = time.perf_counter()
     network_factory = functools.partial(
         brax_networks.make_ppo_networks,
@@ -82,7 +90,7 @@ def brax_reference(config: PPOConfig, seed: int) -> dict:
         deterministic_eval=True,
         network_factory=network_factory,
         seed=seed,
-        progress_fn=lambda step, metrics: reports.append((step, dict(metrics))),
+        progress_fn=progress,
     )
     final = reports[-1][1]
     return {
@@ -93,27 +101,53 @@ def brax_reference(config: PPOConfig, seed: int) -> dict:
     }
 
 
+def _chunk_rate(config: PPOConfig, iterations: int):
+    """A function that trains ``iterations`` more PPO iterations of one run of ``config``
+    (seed 0, compiled beforehand) and returns their training env-steps/s."""
+    step_config = compiled_config(config)
+    state = init_state(config, seed=0)
+    for _ in range(2):  # compile, and check that the next call does not compile again
+        state, _ = train_iterations(state, step_config, iterations)
+    jax.block_until_ready(state)
+
+    def chunk() -> float:
+        nonlocal state
+        start = time.perf_counter()
+        state, _ = train_iterations(state, step_config, iterations)
+        jax.block_until_ready(state)
+        return iterations * config.steps_per_iteration / (time.perf_counter() - start)
+
+    return chunk
+
+
 def training_throughput(
-    config: PPOConfig, sgb_config: PPOConfig, steps: int = 400_000, repeats: int = 3
+    config: PPOConfig, sgb_config: PPOConfig, rounds: int = 12, iterations: int = 20
 ) -> dict:
-    """Training env-steps/s of our vanilla and SGB PPO and of Brax's PPO, measured in
-    ``repeats`` interleaved rounds in one sitting (the long runs may share the machine
-    with other work); the ratios are of the medians."""
-    runs = {
-        "ours": lambda: ours(replace(config, total_steps=steps), 0),
-        "brax": lambda: brax_reference(replace(config, total_steps=steps), 0),
-        "sgb_64_types": lambda: ours(replace(sgb_config, total_steps=steps), 0),
-    }
-    rounds = [
-        {name: run()["train_steps_per_s"] for name, run in runs.items()} for _ in range(repeats)
-    ]
-    sps = {name: float(np.median([r[name] for r in rounds])) for name in runs}
+    """Training env-steps/s of Brax's PPO, our vanilla PPO and our SGB PPO, interleaved
+    chunk by chunk: after each of Brax's training epochs (``iterations`` PPO iterations,
+    timed by Brax itself, evaluation excluded) ours and SGB's train as many iterations,
+    so the three share the machine's state of the moment. The first two rounds are
+    dropped (Brax's training epoch compiles in both); the ratios are the medians of the
+    per-round ratios."""
+    ours_chunk = _chunk_rate(config, iterations)
+    sgb_chunk = _chunk_rate(sgb_config, iterations)
+    samples = []
+
+    def after_epoch(step: int, metrics: dict) -> None:
+        if "training/sps" in metrics:
+            brax_sps = float(metrics["training/sps"])
+            samples.append({"brax": brax_sps, "ours": ours_chunk(), "sgb_64_types": sgb_chunk()})
+
+    steps = rounds * iterations * config.steps_per_iteration
+    brax_reference(replace(config, total_steps=steps, num_evals=rounds), 0, after_epoch)
+    kept = samples[2:]
+    sps = {name: float(np.median([r[name] for r in kept])) for name in kept[0]}
     return {
-        "steps": steps,
-        "rounds": rounds,
+        "steps_per_round": iterations * config.steps_per_iteration,
+        "rounds": kept,
         "steps_per_s": sps,
-        "ratio_ours_to_brax": sps["ours"] / sps["brax"],
-        "ratio_sgb_to_ours": sps["sgb_64_types"] / sps["ours"],
+        "ratio_ours_to_brax": float(np.median([r["ours"] / r["brax"] for r in kept])),
+        "ratio_sgb_to_ours": float(np.median([r["sgb_64_types"] / r["ours"] for r in kept])),
     }
 
 
