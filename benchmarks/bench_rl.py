@@ -27,6 +27,7 @@ import json
 import subprocess
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import asdict, replace
 from pathlib import Path
 
@@ -52,7 +53,9 @@ def ours(config: PPOConfig, seed: int) -> dict:
     }
 
 
-def brax_reference(config: PPOConfig, seed: int, after_epoch=None) -> dict:
+def brax_reference(
+    config: PPOConfig, seed: int, after_epoch: Callable[[int, dict], None] | None = None
+) -> dict:
     """Brax's PPO with the same settings (one unroll per environment per update, as ours);
     ``after_epoch(step, metrics)``, if given, is called after each evaluation."""
     reports = []
@@ -101,12 +104,12 @@ def brax_reference(config: PPOConfig, seed: int, after_epoch=None) -> dict:
     }
 
 
-def _chunk_rate(config: PPOConfig, iterations: int):
+def _chunk_rate(config: PPOConfig, iterations: int) -> Callable[[], float]:
     """A function that trains ``iterations`` more PPO iterations of one run of ``config``
     (seed 0, compiled beforehand) and returns their training env-steps/s."""
     step_config = compiled_config(config)
     state = init_state(config, seed=0)
-    for _ in range(2):  # compile, and check that the next call does not compile again
+    for _ in range(2):  # compile and warm up, outside the timed rounds
         state, _ = train_iterations(state, step_config, iterations)
     jax.block_until_ready(state)
 
