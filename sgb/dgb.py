@@ -21,7 +21,7 @@ The genome is the g-nets' parameters plus the p-net's biases (stored directly);
 
 import dataclasses
 from collections.abc import Sequence
-from functools import partial
+from functools import lru_cache, partial
 from typing import Any
 
 import flax
@@ -35,7 +35,7 @@ from sgb import validation
 from sgb.classifiers import DenseClassifier, dense_sizes, with_kernels
 from sgb.compression import code_dims, dgb_gnet_hidden
 from sgb.data import Dataset
-from sgb.training import accuracy, cross_entropy_step, train_loop
+from sgb.training import accuracy, adam_state, cross_entropy_step, train_loop
 
 GNetParams = list[tuple[jnp.ndarray, jnp.ndarray]]
 
@@ -174,7 +174,10 @@ class DGBState:
 
 
 class DGB:
-    """The codes, optimizers and jitted functions of a DGB for one config and data shape."""
+    """The codes, optimizers and jitted functions of a DGB for one config and data shape.
+
+    ``pnet_step`` and ``write_back_step`` are the compiled steps; both donate the state.
+    """
 
     def __init__(self, config: DGBConfig, input_shape: Sequence[int], num_classes: int):
         self.config = config
@@ -182,14 +185,14 @@ class DGB:
         self.codes = [jnp.asarray(c) for c in layer_codes(self.sizes)]
         self.model = DenseClassifier((*config.hidden, num_classes), config.conv_features)
         self.gnet_tx = optax.adam(config.gnet_learning_rate)
+        self.pnet_step = jax.jit(pnet_step, donate_argnums=0)
+        self.write_back_step = jax.jit(self.write_back, donate_argnums=0)
 
     def init(self, x: np.ndarray) -> DGBState:
         """Initial state: a random p-net overwritten by fresh g-nets' kernels."""
         pnet_key, gnet_key, key = jax.random.split(jax.random.key(self.config.seed), 3)
         params = self.model.init(pnet_key, x[:1])
-        pnet = TrainState.create(
-            apply_fn=self.model.apply, params=params, tx=optax.adam(self.config.learning_rate)
-        )
+        pnet = adam_state(self.model.apply, params, self.config.learning_rate)
         hidden = dgb_gnet_hidden(self.config.gnet_width)
         keys = jax.random.split(gnet_key, len(self.codes) - 1)
         gnets = [
@@ -204,9 +207,9 @@ class DGB:
             gnet_opt=self.gnet_tx.init(gnets),
             best_params=copy(pnet.params),
             best_gnets=copy(gnets),
-            best_accuracy=jnp.asarray(-1.0),
-            fit_mse=jnp.asarray(jnp.nan),
-            rounds=jnp.asarray(0),
+            best_accuracy=jnp.asarray(-1.0, jnp.float32),  # strong types, as steps return them
+            fit_mse=jnp.asarray(jnp.nan, jnp.float32),
+            rounds=jnp.asarray(0, jnp.int32),
             key=key,
         )
 
@@ -271,6 +274,13 @@ def pnet_step(state: DGBState, x, y, key) -> tuple[DGBState, dict]:
     return state.replace(pnet=pnet), metrics
 
 
+@lru_cache(maxsize=4)
+def dgb_for(config: DGBConfig, input_shape: tuple[int, ...], num_classes: int) -> DGB:
+    """The ``DGB`` of ``config`` for inputs of ``input_shape``, built once per process, so
+    that training it again in chunks (``train_dgb`` with a ``state``) compiles nothing anew."""
+    return DGB(config, input_shape, num_classes)
+
+
 def train_dgb(
     config: DGBConfig, data: Dataset, progress: bool = True, state: DGBState | None = None
 ) -> tuple[DGB, DGBState, list[dict[str, float]]]:
@@ -282,22 +292,21 @@ def train_dgb(
     Given a ``state`` (a DGB of this config trained for ``state.rounds`` rounds), training
     continues from it, and the state passed in is consumed (its buffers are reused).
     """
-    dgb = DGB(config, data.x_train.shape[1:], data.num_classes)
+    dgb = dgb_for(config, data.x_train.shape[1:], data.num_classes)
     n_val = min(config.validation_size, len(data.x_train))
     pick = np.random.default_rng(config.seed + 1).choice(len(data.x_train), n_val, replace=False)
     x_val, y_val = jnp.asarray(data.x_train[pick]), jnp.asarray(data.y_train[pick])
     state = dgb.init(data.x_train) if state is None else state
     # the state is donated: its buffers (the best network among them) are reused, not copied
-    write_back = jax.jit(lambda state: dgb.write_back(state, x_val, y_val), donate_argnums=0)
     state, history = train_loop(
         state,
-        jax.jit(pnet_step, donate_argnums=0),
+        dgb.pnet_step,
         data.x_train,
         data.y_train,
         batch_size=config.batch_size,
         num_steps=config.rounds * config.pnet_steps,
         seed=config.seed + int(state.rounds),
-        hook=write_back,
+        hook=lambda state: dgb.write_back_step(state, x_val, y_val),
         hook_every=config.pnet_steps,
         params_of=lambda state: state.pnet.params,
         progress=progress,

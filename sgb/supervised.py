@@ -10,14 +10,13 @@
 """
 
 import dataclasses
+from functools import partial
 from typing import Any
 
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
-from flax.training.train_state import TrainState
 
 from sgb import validation
 from sgb.classifiers import DenseClassifier, sgb_classifier
@@ -27,7 +26,7 @@ from sgb.elbo import cross_entropy
 from sgb.layers import KL_COUNTINGS, KLCounting
 from sgb.population import apply_mean_network, apply_population, init_params
 from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
-from sgb.training import cross_entropy_step, fit_elbo, train_loop
+from sgb.training import adam_state, cross_entropy_step, fit_elbo, train_loop
 
 
 def _check_training(config: "ClassifierConfig | DenseConfig") -> None:
@@ -143,9 +142,7 @@ def train_dense(
     """Train the uncompressed network on cross-entropy; returns (model, params, history)."""
     model = DenseClassifier((*config.hidden, data.num_classes), config.conv_features)
     params = model.init(jax.random.key(config.seed), data.x_train[:1])
-    state = TrainState.create(
-        apply_fn=model.apply, params=params, tx=optax.adam(config.learning_rate)
-    )
+    state = adam_state(model.apply, params, config.learning_rate)
     state, history = train_loop(
         state,
         jax.jit(cross_entropy_step, donate_argnums=0),  # steps update the state in place
@@ -179,8 +176,14 @@ def innate_accuracy(
 
 def dense_accuracy(model: nn.Module, params: Any, x: np.ndarray, y: np.ndarray) -> float:
     """Test accuracy of a deterministic ``DenseClassifier`` (DGB or uncompressed)."""
-    params = {"params": params["params"]}
-    return float((jnp.argmax(jax.jit(model.apply)(params, x), -1) == y).mean())
+    logits = _dense_logits(model, {"params": params["params"]}, x)
+    return float((jnp.argmax(logits, -1) == y).mean())
+
+
+@partial(jax.jit, static_argnums=0)
+def _dense_logits(model: nn.Module, params: Any, x: np.ndarray) -> jnp.ndarray:
+    """``model``'s logits (n, classes), compiled once per model and input shape."""
+    return model.apply(params, x)
 
 
 def train_and_evaluate(

@@ -79,6 +79,16 @@ def train_loop(
     return state, history
 
 
+def adam_state(apply_fn: Callable, params: Any, learning_rate: float) -> TrainState:
+    """A flax ``TrainState`` of ``params`` with Adam at ``learning_rate``.
+
+    Its step counter is an int32 array, not flax's Python 0, so a jitted step returns a
+    state of the signature it was given and compiles once, not twice.
+    """
+    state = TrainState.create(apply_fn=apply_fn, params=params, tx=optax.adam(learning_rate))
+    return state.replace(step=jnp.zeros((), jnp.int32))
+
+
 def accuracy(logits: jnp.ndarray, labels: jnp.ndarray) -> jnp.ndarray:
     """Fraction of examples whose largest logit is the label."""
     return jnp.mean(jnp.argmax(logits, -1) == labels)
@@ -116,7 +126,7 @@ def fit_elbo(
     if epochs < 1:
         raise ValueError(f"epochs must be >= 1, got {epochs}")
     own = jax.tree_util.tree_map(jnp.copy, params)  # own buffers, so steps can donate them
-    state = TrainState.create(apply_fn=model.apply, params=own, tx=optax.adam(learning_rate))
+    state = adam_state(model.apply, own, learning_rate)
 
     @partial(jax.jit, donate_argnums=0)
     def elbo_step(state: TrainState, xb, yb, key):

@@ -148,7 +148,20 @@ def test_budget_run_killed_after_a_chunk_resumes_and_ends_as_an_uninterrupted_on
         out_types=2,
     )
     data = _toy()
-    uninterrupted = list(train_with_budget(config, data))
+    run = train_with_budget(config, data)
+    uninterrupted = [next(run)]
+    compiles = []
+
+    def count(event: str, _duration: float, **_) -> None:
+        if event == "/jax/core/compile/backend_compile_duration":
+            compiles.append(event)
+
+    jax.monitoring.register_event_duration_secs_listener(count)
+    try:
+        uninterrupted += list(run)
+    finally:
+        jax.monitoring.unregister_event_duration_listener(count)
+    assert compiles == []  # later chunks reuse the first chunk's compiled steps
     state_file = tmp_path / "run.state.npz"
     first = next(train_with_budget(config, data, state_file))  # killed after one chunk
     resumed = list(train_with_budget(config, data, state_file))

@@ -27,7 +27,7 @@ from sgb import resume, validation
 from sgb.classifiers import dense_sizes, with_kernels
 from sgb.compression import CONVENTIONS, compression, setting_for_ratio
 from sgb.data import Dataset, load
-from sgb.dgb import DGB, DGBConfig, train_dgb
+from sgb.dgb import DGB, DGBConfig, dgb_for, train_dgb
 from sgb.experiments import check_profile
 from sgb.provenance import (
     _jsonable,
@@ -90,7 +90,7 @@ def train_with_budget(
     ``test_accuracy`` (the best network's), ``generated_test_accuracy``, ``fit_mse``."""
     _, width = sizes_and_width(config, data)
     dgb_config = dataclasses.replace(config.dgb, gnet_width=width, rounds=config.chunk_rounds)
-    dgb = DGB(dgb_config, data.x_train.shape[1:], data.num_classes)
+    dgb = dgb_for(dgb_config, data.x_train.shape[1:], data.num_classes)
     run = json.loads(json.dumps({"config": _jsonable(config), "gnet_width": width}))
     state, progress = dgb.init(data.x_train), {"records": []}
     if state_file is not None and state_file.exists():
