@@ -2,6 +2,7 @@
 
 import dataclasses
 import datetime
+import functools
 import importlib.metadata
 import json
 import math
@@ -28,8 +29,10 @@ def package_versions() -> dict[str, str]:
     return versions
 
 
+@functools.cache
 def git_commit() -> str:
-    """The commit of the working tree, or "unknown".
+    """The commit of the working tree when this process first asked, or "unknown": the
+    code the process runs, whatever is committed while it runs.
 
     ``+dirty`` marks changes to tracked files outside ``results/`` (results files written
     by an earlier experiment of the same run do not count).

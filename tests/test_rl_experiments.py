@@ -1,5 +1,6 @@
 """Figure 3-5 experiment logic: sweep summaries, correlations, paired tests, profiles."""
 
+from collections import Counter
 from dataclasses import replace
 
 import numpy as np
@@ -30,12 +31,23 @@ def test_summary_divides_by_the_mean_vanilla_return():
 def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
     config = rl.sweep_config("ant", "cpu")
     runs = rl.sweep_runs(config)
-    assert len(runs) == len(set(runs)) == 3 * (1 + 4 * 2)
+    seeds = Counter((s, k) for s, k, _ in runs)
+    assert seeds[("ours", None)] == seeds[("ours", 128)] == seeds[("authors", 16)] == 10
+    assert seeds[("ours", 64)] == seeds[("authors", 32)] == seeds[("ours_typed_inputs", 16)] == 5
+    assert len(runs) == len(set(runs)) == 10 * 5 + 5 * 4 + 5 * 2
     assert {(s, k) for s, k, _ in runs if k is None} == {("ours", None)}
-    authors = rl.with_settings(replace(config.ppo, network=NetworkConfig(cell_types=16)), "authors")
+    assert [seed for *_, seed in runs] == sorted(seed for *_, seed in runs)  # seed by seed
+    net16 = replace(config.ppo, network=NetworkConfig(cell_types=16))
+    authors = rl.with_settings(net16, "authors")
     assert authors.kl_coef == 0.0 and authors.network.rho_init == -7.0
-    assert authors.network.all_layers_sgb and authors.network.prior == "gaussian"
+    assert authors.network.typed_inputs and authors.network.sgb_output
+    assert authors.network.prior == "gaussian"
     assert rl.with_settings(config.ppo, "authors") == config.ppo  # vanilla has no genome
+    # the ablations swap the input typing and nothing else
+    untyped = rl.with_settings(net16, "authors_untyped_inputs")
+    assert untyped == replace(authors, network=replace(authors.network, typed_inputs=False))
+    typed = rl.with_settings(net16, "ours_typed_inputs")
+    assert typed == replace(net16, network=replace(net16.network, typed_inputs=True))
     names = {rl.checkpoint_name("ant", k, seed, "cpu", s) for s, k, seed in runs}
     assert len(names) == len(runs)
 

@@ -253,21 +253,26 @@ def test_phenotype_agrees_with_the_sgb_layers():
 
 
 @pytest.mark.parametrize(
-    ("prior", "all_layers_sgb"), [("mixture", False), ("gaussian", False), ("gaussian", True)]
+    ("prior", "typed_sgb_out"), [("mixture", False), ("gaussian", False), ("gaussian", True)]
 )
-def test_rl_and_layer_paths_draw_the_same_individual(prior, all_layers_sgb):
+def test_rl_and_layer_paths_draw_the_same_individual(prior, typed_sgb_out):
     """From the same key, the RL phenotype has the SGB layers' kernels and outputs; the
     network's KL is the layers' (exactly for the Gaussian prior, on average over keys
     for the mixture, whose per-pair draws come from other keys)."""
     network = NetworkConfig(
-        hidden=(32, 16), cell_types=4, rho_init=-1.0, prior=prior, all_layers_sgb=all_layers_sgb
+        hidden=(32, 16),
+        cell_types=4,
+        rho_init=-1.0,
+        prior=prior,
+        typed_inputs=typed_sgb_out,
+        sgb_output=typed_sgb_out,
     )
     actor = MLP(network, 2, 3)
     params = init_params(actor, jax.random.PRNGKey(0), jnp.zeros((1, 3)))
     keys = jax.random.split(jax.random.PRNGKey(1), 3)
     layers = individuals(actor, params, _noise(actor, params, keys))
     names = list(sgb_layers(actor))
-    assert names == ["hidden_0", "hidden_1"] + ["out"] * all_layers_sgb
+    assert names == ["hidden_0", "hidden_1"] + ["out"] * typed_sgb_out
     x = jax.random.normal(jax.random.PRNGKey(2), (5, 3))
     for i, key in enumerate(keys):
         out, state = actor.apply(params, x, rngs={"sample": key}, mutable=["individual", "losses"])
@@ -297,7 +302,12 @@ def test_rl_and_layer_paths_draw_the_same_individual(prior, all_layers_sgb):
 
 def test_the_authors_network_types_every_layer_and_draws_means_from_n_0_01():
     network = NetworkConfig(
-        hidden=(64, 64), cell_types=64, all_layers_sgb=True, mean_init=0.1, rho_init=-7.0
+        hidden=(64, 64),
+        cell_types=64,
+        typed_inputs=True,
+        sgb_output=True,
+        mean_init=0.1,
+        rho_init=-7.0,
     )
     params = init_params(MLP(network, 16, 27), jax.random.PRNGKey(0), jnp.zeros((1, 27)))["params"]
     assert params["hidden_0"]["genome"]["mu"].shape == (27, 64)  # more types than inputs

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sgb import stats, validation
+from sgb import runlock, stats, validation
 from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.paths import committed_results
 from sgb.provenance import provenance, read_results, results_file, write_results
@@ -33,21 +33,39 @@ BACKENDS = {"ant": "spring", "halfcheetah": "spring"}
 
 
 SETTINGS = ("ours", "authors")
+# the typing ablation of chapter 5: each settings with the other's input typing
+ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs")
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One point of Figure 3: genome settings, cell types (None = vanilla), its seeds."""
+
+    settings: str
+    cell_types: int | None
+    seeds: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        validation.choice("settings", self.settings, SETTINGS + ABLATIONS)
+        validation.integers("seeds", self.seeds, minimum=0)
 
 
 @dataclass(frozen=True)
 class SweepConfig:
-    """Figure 3: which cell-type counts (None = vanilla), seeds, PPO settings, and genome
-    settings (``SETTINGS``: each SGB run is trained under each; vanilla once)."""
+    """Figure 3: the points of the sweep and the PPO settings they share."""
 
-    cell_types: tuple[int | None, ...]
-    seeds: tuple[int, ...]
+    points: tuple[SweepPoint, ...]
     ppo: PPOConfig
-    settings: tuple[str, ...] = ("ours",)
 
-    def __post_init__(self) -> None:
-        for name in self.settings:
-            validation.choice("settings", name, SETTINGS)
+    @property
+    def cell_types(self) -> tuple[int | None, ...]:
+        """The cell-type counts of the sweep, in order of first appearance."""
+        return tuple(dict.fromkeys(p.cell_types for p in self.points))
+
+    @property
+    def seeds(self) -> tuple[int, ...]:
+        """Every seed any point runs, ascending."""
+        return tuple(sorted({seed for p in self.points for seed in p.seeds}))
 
 
 def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
@@ -55,12 +73,24 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
     ``RL/custom_layers.py``, ``RL/models.py``, ``RL/configs/*.yaml``): every layer an SGB
     layer, the observation entries and outputs typed too; type means drawn from N(0, 0.1);
     rho_init -7 (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0 on the Ant, 1e-4 on
-    the HalfCheetah. The PPO itself stays ours (see chapter 5)."""
-    validation.choice("settings", settings, SETTINGS)
+    the HalfCheetah. The PPO itself stays ours (see chapter 5).
+
+    The ablations swap one difference: ``"ours_typed_inputs"`` is ours with the
+    observation entries typed, ``"authors_untyped_inputs"`` the authors' with one type
+    per observation entry.
+    """
+    validation.choice("settings", settings, SETTINGS + ABLATIONS)
     if settings == "ours" or not ppo.network.sgb:
         return ppo
+    if settings == "ours_typed_inputs":
+        return replace(ppo, network=replace(ppo.network, typed_inputs=True))
     network = replace(
-        ppo.network, all_layers_sgb=True, mean_init=0.1, rho_init=-7.0, prior="gaussian"
+        ppo.network,
+        typed_inputs=settings == "authors",
+        sgb_output=True,
+        mean_init=0.1,
+        rho_init=-7.0,
+        prior="gaussian",
     )
     return replace(ppo, network=network, kl_coef=0.0 if ppo.env.name == "ant" else 1e-4)
 
@@ -94,10 +124,8 @@ def _ppo(env: str, profile: str) -> PPOConfig:
         return replace(
             base, total_steps=4096, num_envs=32, episode_length=64, num_evals=1, eval_individuals=4
         )
-    if profile == "cpu" and env == "ant":  # long enough that vanilla PPO walks (bench_rl)
+    if profile == "cpu":  # long enough that vanilla PPO walks and runs (bench_rl, bench_backends)
         return replace(base, total_steps=2_000_000, num_evals=4, eval_individuals=32)
-    if profile == "cpu":
-        return replace(base, total_steps=30_000, num_evals=2, eval_individuals=16)
     return replace(
         base,
         total_steps=50_000_000,
@@ -110,16 +138,39 @@ def _ppo(env: str, profile: str) -> PPOConfig:
 
 
 def sweep_config(env: str, profile: str) -> SweepConfig:
-    """The Figure 3 sweep for ``env`` at ``profile``."""
+    """The Figure 3 sweep for ``env`` at ``profile``.
+
+    At ``cpu`` on the Ant, the points the verdicts compare (vanilla, 128 and 16 types)
+    get 10 seeds and the others 5: with the seed spread of the first 3 seeds (SD of the
+    fraction of vanilla about 0.2-0.3), that is what a difference of 0.3 of vanilla
+    between 128 and 16 types needs at 80 % power (chapter 5 computes the power reached).
+    The typing ablation runs at 16 types with 5 seeds.
+    """
     check_profile(profile)
     if env not in BACKENDS:
         raise ValueError(f"env must be one of {sorted(BACKENDS)}, got {env!r}")
-    cpu_types = (None, 128, 64, 32, 16) if env == "ant" else (64, None, 128, 32)
-    types = {"smoke": (None, 16), "cpu": cpu_types}.get(profile, (None, 128, 64, 48, 32, 16))
-    seeds = {"smoke": (0,), "cpu": (0, 1, 2)}.get(profile, (0, 1, 2, 3, 4))
-    # the cpu HalfCheetah runs are too short to learn (chapter 5): one settings there
-    settings = ("ours",) if (env, profile) == ("halfcheetah", "cpu") else SETTINGS
-    return SweepConfig(types, seeds, _ppo(env, profile), settings)
+    if profile == "smoke":
+        many = few = (0,)
+        types, ablations = (None, 16), ()
+    elif profile == "cpu" and env == "ant":
+        many, few = tuple(range(10)), tuple(range(5))
+        types, ablations = (None, 128, 64, 32, 16), ABLATIONS
+    elif profile == "cpu":
+        many, few = tuple(range(5)), tuple(range(3))
+        types, ablations = (None, 128, 64, 32, 16), ()
+    else:
+        many = few = tuple(range(5))
+        types, ablations = (None, 128, 64, 48, 32, 16), ()
+    compared = (None, types[1], types[-1])
+    points = [SweepPoint("ours", None, many)]
+    points += [
+        SweepPoint(settings, k, many if k in compared else few)
+        for settings in SETTINGS
+        for k in types
+        if k is not None
+    ]
+    points += [SweepPoint(name, types[-1], few) for name in ablations]
+    return SweepConfig(tuple(points), _ppo(env, profile))
 
 
 def checkpoint_name(
@@ -140,75 +191,106 @@ def checkpoint_name(
 
 
 def sweep_runs(config: SweepConfig) -> list[tuple[str, int | None, int]]:
-    """(settings, cell types, seed) of every run: vanilla once (it has no genome), each
-    SGB count under each settings."""
-    return [
-        (settings, k, seed)
-        for settings in config.settings
-        for k in config.cell_types
-        if k is not None or settings == config.settings[0]
-        for seed in config.seeds
-    ]
+    """(settings, cell types, seed) of every run, seed by seed: all points' seed 0, then
+    seed 1, ..., so that a sweep stopped part way has every point at about the same
+    number of seeds."""
+    runs = [(p.settings, p.cell_types, seed) for p in config.points for seed in p.seeds]
+    return sorted(runs, key=lambda run: run[2])
 
 
 def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     """Train the sweep; write per-run returns, fractions of vanilla and checkpoints.
 
     Nothing is lost when the sweep dies: a run whose checkpoint exists with this
-    profile's settings is not trained again, and a run in progress keeps its training
-    state next to its checkpoint (``*.state.npz``) and continues from it.
+    profile's settings is not trained again (and keeps the provenance it was trained
+    with), and a run in progress keeps its training state next to its checkpoint
+    (``*.state.npz``) and continues from it. Several processes may run the same sweep at
+    once: each trains the runs no other holds (``sgb.runlock``). After every run trained,
+    the results file is written again from every finished checkpoint of the sweep
+    (``"complete": false`` until all are).
     """
     config = sweep_config(env, profile)
     path = results_file(Path(out_dir) / "rl", f"fig3_{env}", profile)
-    start = time.perf_counter()
+    planned = sweep_runs(config)
+    for i, (settings, k, seed) in enumerate(planned):
+        label = f"fig3 {env} {settings} k={k} seed {seed} ({i + 1}/{len(planned)})"
+        checkpoint = (
+            Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile, settings)
+        )
+        with runlock.claim(checkpoint) as mine:
+            if not mine:
+                print(f"{label}: another process is training it", flush=True)
+                continue
+            if trained_run(run_config(config, settings, k), seed, checkpoint, profile, label):
+                write_sweep(path, config, profile, Path(out_dir))
+    return write_sweep(path, config, profile, Path(out_dir))
+
+
+def run_config(config: SweepConfig, settings: str, cell_types: int | None) -> PPOConfig:
+    """The PPO settings of the sweep's run at ``settings`` and ``cell_types``."""
+    return with_settings(
+        replace(config.ppo, network=NetworkConfig(cell_types=cell_types)), settings
+    )
+
+
+def write_sweep(path: Path, config: SweepConfig, profile: str, out_dir: Path) -> Path:
+    """Write the results of every finished run of ``config`` under ``out_dir``; the wall
+    time recorded is the sum of the runs' own training times, whenever each was trained."""
+    env = config.ppo.env.name
     runs = []
     for settings, k, seed in sweep_runs(config):
-        ppo = with_settings(replace(config.ppo, network=NetworkConfig(cell_types=k)), settings)
-        name = checkpoint_name(env, k, seed, profile, settings)
-        checkpoint = Path(out_dir) / CHECKPOINT_DIR / name
-        curve = trained_run(ppo, seed, checkpoint, profile)
-        runs.append(
-            {
-                "settings": settings,
-                "cell_types": k,
-                "seed": seed,
-                "final_return": curve["eval_returns"][-1],
-                **curve,
-                "checkpoint": checkpoint.name,
-            }
-        )
-    results = {"env": env, "runs": runs, "summary": summarise_sweep(runs)}
-    record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(path, results, record)
-
-
-def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str) -> dict:
-    """The learning curve of ``ppo`` trained with ``seed``, kept in ``checkpoint``: read
-    from it when it holds this run, else trained and saved there. While training, the
-    training state is kept beside it (``*.state.npz``), so a killed run continues."""
-    curve = finished_run(checkpoint, ppo)
-    if curve is not None:
-        return curve
-    state_file = checkpoint.with_suffix(".state.npz")
-    result = train(ppo, seed=seed, state_file=state_file)
-    checkpoints.save(checkpoint, result, {"profile": profile, "seed": seed})
-    state_file.unlink()
-    return {
-        "eval_steps": result.eval_steps,
-        "eval_returns": result.eval_returns,
-        "train_steps_per_s": result.train_steps_per_s,
+        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile, settings)
+        record = finished_run(checkpoint, run_config(config, settings, k))
+        if record is not None:
+            runs.append({"settings": settings, "cell_types": k, "seed": seed, **record})
+    results = {
+        "env": env,
+        "complete": len(runs) == len(sweep_runs(config)),
+        "runs": runs,
+        "summary": summarise_sweep(runs),
+        "summary_last_two": summarise_sweep(runs, "last_two_return"),
     }
+    wall = sum(r["wall_time_s"] for r in runs)
+    seeds = sorted({r["seed"] for r in runs})
+    return write_results(path, results, provenance(config, profile, seeds, wall))
+
+
+def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str, label: str) -> bool:
+    """Make sure ``checkpoint`` holds ``ppo`` trained with ``seed``: train it unless it
+    does (a killed run continues from its training state, ``*.state.npz``, kept beside
+    it); returns whether it trained now. ``label`` names the run in what it prints."""
+    if finished_run(checkpoint, ppo) is not None:
+        print(f"{label}: reused {checkpoint}", flush=True)
+        return False
+    state_file = checkpoint.with_suffix(".state.npz")
+    print(f"{label}: {'resumed' if state_file.exists() else 'training'}", flush=True)
+    result = train(ppo, seed=seed, state_file=state_file, label=label)
+    checkpoints.save(checkpoint, result, provenance(ppo, profile, [seed], result.wall_time_s))
+    state_file.unlink()
+    return True
 
 
 def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
-    """The learning curve kept in ``checkpoint`` if it holds a run trained with ``ppo``
-    (``None`` if there is none, or it was trained with other settings)."""
+    """The record kept in ``checkpoint`` if it holds a run trained with ``ppo`` (``None``
+    if there is none, or it was trained with other settings): its learning curve, its
+    scores (the last evaluation; the mean of the last two), its speed, wall time and
+    the commit and date it was trained at."""
     if not checkpoint.exists():
         return None
     config, _, _, meta = checkpoints.load(checkpoint)
     if config != ppo:
         return None
-    return {key: meta[key] for key in ("eval_steps", "eval_returns", "train_steps_per_s")}
+    returns = meta["eval_returns"]
+    trained = meta.get("provenance", {})
+    return {
+        "final_return": returns[-1],
+        "last_two_return": float(np.mean(returns[-2:])),
+        **{key: meta[key] for key in ("eval_steps", "eval_returns", "train_steps_per_s")},
+        "wall_time_s": meta["wall_time_s"],
+        "git_commit": trained.get("git_commit", "not recorded"),
+        "date": trained.get("date", "not recorded"),
+        "checkpoint": checkpoint.name,
+    }
 
 
 def seed_sem(values: np.ndarray) -> float:
@@ -216,17 +298,17 @@ def seed_sem(values: np.ndarray) -> float:
     return float(stats.sem(values)) if values.size > 1 else float("nan")
 
 
-def summarise_sweep(runs: list[dict]) -> list[dict]:
-    """Per settings and cell-type count: mean final return, SEM over seeds, fraction of
-    vanilla and its SEM.
+def summarise_sweep(runs: list[dict], score: str = "final_return") -> list[dict]:
+    """Per settings and cell-type count: mean ``score`` (``"final_return"``, the last
+    evaluation, or ``"last_two_return"``), SEM over seeds, fraction of vanilla and its SEM.
 
     The fraction divides each seed's return by the mean vanilla return.
     """
-    vanilla = np.mean([r["final_return"] for r in runs if r["cell_types"] is None])
+    vanilla = np.mean([r[score] for r in runs if r["cell_types"] is None])
     out = []
     for settings, k in dict.fromkeys((r["settings"], r["cell_types"]) for r in runs):
         values = np.array(
-            [r["final_return"] for r in runs if r["cell_types"] == k and r["settings"] == settings]
+            [r[score] for r in runs if r["cell_types"] == k and r["settings"] == settings]
         )
         spread = seed_sem(values)
         out.append(

@@ -32,10 +32,16 @@ def _config_dict(config: PPOConfig) -> dict[str, Any]:
 
 
 def config_from_dict(data: dict[str, Any]) -> PPOConfig:
-    """Inverse of the JSON config written by ``save``."""
+    """Inverse of the JSON config written by ``save``. Sidecars written before the input
+    typing and the SGB output layer were separate switches hold one ``all_layers_sgb``
+    for both; it is read as both."""
     data = dict(data)
     net = dict(data.pop("network"))
     net["hidden"] = tuple(net["hidden"])
+    if "all_layers_sgb" in net:
+        both = net.pop("all_layers_sgb")
+        net.setdefault("typed_inputs", both)
+        net.setdefault("sgb_output", both)
     return PPOConfig(env=EnvSpec(**data.pop("env")), network=NetworkConfig(**net), **data)
 
 

@@ -3,10 +3,11 @@
 Both networks are MLPs (swish between layers). In SGB mode the hidden layers
 are ``sgb.layers.SGBDense`` layers whose neurons fall into ``cell_types``
 types (the input layer keeps one type per observation entry) and the output
-layer is an ordinary deterministic ``nn.Dense``, as in the paper. With
-``all_layers_sgb`` (the authors' code) the observation entries are typed too
-and the output layer is an SGB layer (``min(cell_types, n)`` types for n
-neurons). In vanilla mode every layer is ``nn.Dense``.
+layer is an ordinary deterministic ``nn.Dense``, as in the paper. The authors'
+code does two things more, each a switch here: ``typed_inputs`` groups the
+observation entries into types too, and ``sgb_output`` makes the output layer an
+SGB layer (``min(cell_types, n)`` types for n neurons). In vanilla mode every
+layer is ``nn.Dense``.
 
 An individual is a *phenotype*: the list of (kernel, bias) of every layer,
 drawn once from the genome with a PRNG key and then used unchanged for a whole
@@ -40,22 +41,25 @@ class NetworkConfig:
     ``cell_types=None`` is the vanilla (deterministic) network; an integer
     gives SGB hidden layers with that many cell types per hidden layer.
     ``prior`` is ``"mixture"`` (scale mixture, pi=0.5, sigma1=1, sigma2=e^-6)
-    or ``"gaussian"`` (N(0, 0.1^2)). ``all_layers_sgb`` types the observation entries
-    and makes the output layer an SGB layer too. ``mean_init`` is the standard deviation
-    of the initial type means; ``None``: 1/sqrt(n_in) of each layer.
+    or ``"gaussian"`` (N(0, 0.1^2)). ``typed_inputs`` groups the observation entries into
+    ``cell_types`` types; ``sgb_output`` makes the output layer an SGB layer. ``mean_init``
+    is the standard deviation of the initial type means; ``None``: 1/sqrt(n_in) of each
+    layer.
     """
 
     hidden: tuple[int, ...] = (128, 128)
     cell_types: int | None = None
     prior: str = "mixture"
     rho_init: float = -5.0
-    all_layers_sgb: bool = False
+    typed_inputs: bool = False
+    sgb_output: bool = False
     mean_init: float | None = None
 
     def __post_init__(self) -> None:
         validation.integers("hidden", self.hidden)
         validation.real("rho_init", self.rho_init)
-        validation.instance("all_layers_sgb", self.all_layers_sgb, bool)
+        validation.instance("typed_inputs", self.typed_inputs, bool)
+        validation.instance("sgb_output", self.sgb_output, bool)
         if self.mean_init is not None:
             validation.positive("mean_init", self.mean_init)
         if self.cell_types is not None and not (
@@ -74,7 +78,7 @@ class NetworkConfig:
 
 class MLP(nn.Module):
     """``in_features`` -> hidden layers (SGB or dense) -> ``out`` units (dense, or SGB
-    with ``all_layers_sgb``). Layers are named ``hidden_0``, ``hidden_1``, ... and ``out``."""
+    with ``sgb_output``). Layers are named ``hidden_0``, ``hidden_1``, ... and ``out``."""
 
     config: NetworkConfig
     out: int
@@ -87,7 +91,7 @@ class MLP(nn.Module):
         widths = (*cfg.hidden, self.out)
         for i, (name, width) in enumerate(zip(layer_names(cfg), widths, strict=True)):
             if name in sgb:
-                k_in = None if i == 0 and not cfg.all_layers_sgb else cfg.cell_types
+                k_in = None if i == 0 and not cfg.typed_inputs else cfg.cell_types
                 n_in = x.shape[-1]
                 layer = SGBDense(
                     width,
@@ -118,7 +122,7 @@ def sgb_layers(model: MLP) -> dict[str, tuple[int, int]]:
         return {}
     widths = (model.in_features, *cfg.hidden, model.out)
     shapes = dict(zip(layer_names(cfg), zip(widths[:-1], widths[1:], strict=True), strict=True))
-    if not cfg.all_layers_sgb:
+    if not cfg.sgb_output:
         del shapes["out"]
     return shapes
 

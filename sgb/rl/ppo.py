@@ -466,6 +466,7 @@ def train(
     seed: int = 0,
     progress: bool = True,
     state_file: str | Path | None = None,
+    label: str = "PPO",
 ) -> TrainResult:
     """Train with PPO; evaluates ``num_evals`` times, the last one after the final update.
 
@@ -479,7 +480,7 @@ def train(
     (``sgb.resume``), and a call that finds the file continues from it: killed and
     started again, the run ends with the result of an uninterrupted one. The file is
     left in place (a finished one makes the call return at once); the caller removes it
-    once the result is kept.
+    once the result is kept. ``label`` names the run on its progress bar.
     """
     start = time.perf_counter()
     ts = init_state(config, seed)
@@ -499,7 +500,7 @@ def train(
     step_config = compiled_config(config)
     for i in tqdm(
         range(first, config.num_evals),
-        desc="PPO",
+        desc=label,
         initial=first,
         total=config.num_evals,
         disable=not progress,
