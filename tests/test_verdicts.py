@@ -1,0 +1,149 @@
+"""The verdict rule, its tests, their power, and the claims registry, on data with known effects."""
+
+import numpy as np
+import pytest
+from scipy import stats as scipy_stats
+
+from sgb import claims, verdicts
+from sgb.paths import committed_results
+from sgb.reliability import episodes_for, projected_reliability, variance_split
+
+
+def test_welch_agrees_with_scipy_and_its_interval_covers_the_truth():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(1.0, 1.0, 7), rng.normal(0.0, 2.0, 11)
+    test = verdicts.welch(a, b)
+    reference = scipy_stats.ttest_ind(a, b, equal_var=False)
+    assert test.p == pytest.approx(reference.pvalue, rel=1e-9)
+    covered = 0
+    for _ in range(2000):
+        t = verdicts.welch(rng.normal(1.0, 1.0, 7), rng.normal(0.0, 2.0, 11))
+        covered += t.low <= 1.0 <= t.high
+    assert 0.935 <= covered / 2000 <= 0.965
+
+
+def test_the_detectable_effect_has_80_percent_power():
+    """At the detectable effect of a design, the test finds the effect 80 % of the time,
+    and units_to_decide gives the sample size at which a smaller effect is detectable."""
+    rng = np.random.default_rng(1)
+    sd = 1.0
+    effect = 0.5
+    probe = verdicts.welch(rng.normal(effect, sd, 400), rng.normal(0, sd, 400))
+    needed = verdicts.units_to_decide(probe, effect)
+    found = sum(
+        verdicts.verdict(
+            verdicts.welch(rng.normal(effect, sd, needed), rng.normal(0, sd, needed)), effect
+        )
+        == verdicts.REPRODUCED
+        for _ in range(600)
+    )
+    assert 0.72 <= found / 600 <= 0.88  # about 80 % power at the size it names
+
+
+def test_the_rule_finds_a_true_effect_rejects_a_null_and_flags_an_underpowered_design():
+    rng = np.random.default_rng(2)
+    true = verdicts.welch(rng.normal(1.0, 0.5, 30), rng.normal(0.0, 0.5, 30))
+    assert verdicts.verdict(true, 1.0) == verdicts.REPRODUCED
+    assert verdicts.paper_inside(true, 1.0)
+    # a null effect is (almost) never called reproduced, and with a large sample it is
+    # called contradicted
+    calls = [
+        verdicts.verdict(verdicts.welch(rng.normal(0, 1, 10), rng.normal(0, 1, 10)), 1.0)
+        for _ in range(1000)
+    ]
+    assert calls.count(verdicts.REPRODUCED) / 1000 < 0.04  # one side of a 5 % test: 2.5 %
+    big_null = verdicts.welch(rng.normal(0, 1, 400), rng.normal(0, 1, 400))
+    assert verdicts.verdict(big_null, 1.0) == verdicts.CONTRADICTED
+    # an effect of the paper's size measured with too few units: neither side excluded
+    small = verdicts.welch(np.array([0.3, 1.3, 2.3]), np.array([0.0, 1.0, 2.0]))
+    assert verdicts.verdict(small, 0.3) == verdicts.INCONCLUSIVE
+    assert verdicts.units_to_decide(small, 0.3) > 3
+    # the paper's side is negative: the rule mirrors
+    assert verdicts.verdict(
+        verdicts.welch(rng.normal(-1, 0.5, 30), rng.normal(0, 0.5, 30)), -1.0
+    ) == (verdicts.REPRODUCED)
+
+
+def test_paired_and_one_sample_agree_with_scipy():
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=20)
+    b = a + rng.normal(0.3, 0.2, 20)
+    assert verdicts.paired(b, a).p == pytest.approx(scipy_stats.ttest_rel(b, a).pvalue, rel=1e-9)
+    assert verdicts.one_sample(a, 0.5).p == pytest.approx(scipy_stats.ttest_1samp(a, 0.5).pvalue)
+
+
+def test_fisher_interval_covers_the_true_correlation():
+    rng = np.random.default_rng(4)
+    rho, n, covered = 0.5, 50, 0
+    cov = [[1, rho], [rho, 1]]
+    for _ in range(1000):
+        x, y = rng.multivariate_normal([0, 0], cov, n).T
+        t = verdicts.fisher_r(x, y)
+        covered += t.low <= rho <= t.high
+    assert 0.93 <= covered / 1000 <= 0.97
+    x, y = rng.multivariate_normal([0, 0], cov, n).T
+    assert verdicts.fisher_r(x, y).p == pytest.approx(scipy_stats.pearsonr(x, y).pvalue, rel=1e-6)
+    # the n at which r = 0.3 is detectable at 80 % power: the textbook 85
+    assert verdicts.units_to_decide(verdicts.fisher_r(x, y), 0.3) == 85
+
+
+def test_variance_split_recovers_a_known_intraclass_correlation():
+    rng = np.random.default_rng(5)
+    sigma_b, sigma_w, n, k = 1.0, 2.0, 200, 5
+    icc = sigma_b**2 / (sigma_b**2 + sigma_w**2)  # 0.2
+    covered = 0
+    for _ in range(200):
+        x = rng.normal(0, sigma_b, (n, 1)) + rng.normal(0, sigma_w, (n, k))
+        split = variance_split(x)
+        covered += split.icc_ci[0] <= icc <= split.icc_ci[1]
+    assert 0.91 <= covered / 200 <= 0.99
+    assert split.reliability == pytest.approx(projected_reliability(split.icc, k), rel=1e-9)
+    assert episodes_for(0.2) == pytest.approx(16.0)
+    assert projected_reliability(0.2, episodes_for(0.2)) == pytest.approx(0.8)
+    # individuals that do not differ: the split says so
+    same = variance_split(rng.normal(0, 1, (100, 3)))
+    assert same.icc_ci[0] < 0 < same.icc_ci[1]
+
+
+def _sweep(fall: float, seeds: int, rng) -> dict:
+    """Synthetic Figure 3 runs: vanilla at 4000, 128 types at 3000, 16 at 3000 - fall x
+    4000, seed SD 400."""
+    runs = []
+    for k, mean in ((None, 4000.0), (128, 3000.0), (16, 3000.0 - fall * 4000)):
+        for seed in range(seeds):
+            value = float(rng.normal(mean, 400))
+            runs.append(
+                {
+                    "settings": "ours",
+                    "cell_types": k,
+                    "seed": seed,
+                    "final_return": value,
+                    "eval_returns": [value / 2, value, value],
+                }
+            )
+    return {"env": "ant", "runs": runs}
+
+
+def test_figure3_verdicts_on_sweeps_with_known_falls():
+    rng = np.random.default_rng(6)
+    verdict = {
+        (fall, seeds): {
+            r.key: r.verdict for r in claims.figure3_rows(_sweep(fall, seeds, rng), "ant", 2e6)
+        }["fig3.fall_16.ant"]
+        for fall, seeds in ((0.5, 10), (0.0, 40), (0.3, 3))
+    }
+    assert verdict[(0.5, 10)] == verdicts.REPRODUCED
+    assert verdict[(0.0, 40)] == verdicts.CONTRADICTED
+    assert verdict[(0.3, 3)] in (verdicts.INCONCLUSIVE, verdicts.REPRODUCED)
+
+
+def test_the_committed_scorecard_gives_every_claim_one_verdict():
+    rows = claims.scorecard(committed_results())
+    assert {r.verdict for r in rows} <= set(verdicts.VERDICTS)
+    keys = {r.key.split(".")[0] + "." + r.key.split(".")[1] for r in rows}
+    assert {"fig2.sgb_better_high", "fig4e.r_legs", "fig5.population_beats_mean"} <= keys
+    for r in rows:
+        if r.verdict == verdicts.INCONCLUSIVE:
+            assert r.decide  # the budget that would decide is named
+        if r.verdict == verdicts.NOT_TESTABLE:
+            assert r.test is None and r.decide  # the reason
