@@ -9,6 +9,9 @@ from sgb.plots import PALETTE, subplots
 SETTINGS_STYLE = {
     "ours": ("sgb", "o", "SGB, our settings"),
     "authors": ("authors", "s", "SGB, the authors' settings"),
+    # the typing ablation (16 types only): each settings with the other's input typing
+    "ours_typed_inputs": ("sgb", "D", "ours, observation entries typed"),
+    "authors_untyped_inputs": ("authors", "v", "the authors', one type per entry"),
 }
 
 
@@ -34,6 +37,8 @@ def plot_sweep(summary: list[dict], env: str, ax=None):
             marker=marker,
             capsize=3,
             color=PALETTE[color],
+            mfc="none" if len(rows) == 1 else PALETTE[color],
+            ls="none" if len(rows) == 1 else "-",
             label=f"{label} (innate, mean of individuals)",
         )
     ax.axhline(1.0, color=PALETTE["baseline"], ls="--", label="vanilla PPO (width 128)")
