@@ -150,3 +150,13 @@ def units_to_decide(test: Test, paper: float, null: float = 0.0) -> int:
         crit = scipy_stats.norm.ppf(0.5 + LEVEL / 2) + scipy_stats.norm.ppf(POWER)
         return math.ceil((crit / math.atanh(min(effect, 1 - 1e-12))) ** 2 + 3)
     return math.ceil(test.n * (test.detectable / effect) ** 2)
+
+
+def power_at(test: Test, effect: float) -> float:
+    """The power of ``test``'s design to detect a true ``effect`` (two-sided 5 %), at its
+    standard error and degrees of freedom."""
+    dist = scipy_stats.norm if math.isinf(test.dof) else scipy_stats.t(test.dof)
+    crit = dist.ppf(0.5 + LEVEL / 2)
+    se = (test.high - test.low) / (2 * crit)
+    shift = abs(effect) / se
+    return float(dist.sf(crit - shift) + dist.cdf(-crit - shift))

@@ -38,6 +38,8 @@ def test_the_detectable_effect_has_80_percent_power():
         for _ in range(600)
     )
     assert 0.72 <= found / 600 <= 0.88  # about 80 % power at the size it names
+    design = verdicts.welch(rng.normal(effect, sd, needed), rng.normal(0, sd, needed))
+    assert verdicts.power_at(design, design.detectable) == pytest.approx(0.8, abs=0.01)
 
 
 def test_the_rule_finds_a_true_effect_rejects_a_null_and_flags_an_underpowered_design():

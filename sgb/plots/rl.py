@@ -33,7 +33,7 @@ def plot_sweep(summary: list[dict], env: str, ax=None):
         ax.errorbar(
             k,
             [r["fraction"] for r in rows],
-            yerr=[r["sem_fraction"] for r in rows],
+            yerr=[np.nan if r["sem_fraction"] is None else r["sem_fraction"] for r in rows],
             marker=marker,
             capsize=3,
             color=PALETTE[color],
