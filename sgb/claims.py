@@ -39,6 +39,7 @@ EFFECTS = {
     "fig4e.r_legs": "Pearson r",
     "fig4f.r_terrain": "Pearson r",
     "fig5.population_beats_mean": "individuals - mean network (return)",
+    "theorem.A.4": "settled sigma - sqrt(c / (H + c lambda))",
     "theorem": "Jensen gap E[L(w)] - L(mu)",
 }
 
@@ -451,6 +452,44 @@ def theorem_rows(theory: dict) -> list[Row]:
                 test,
                 "Monte Carlo draws of the toy (see chapter 3)",
                 "Monte Carlo units",
+            )
+        )
+    if "elbo_toy" in theory:
+        rows += sigma_law_rows(theory["elbo_toy"])
+    return rows
+
+
+def sigma_law_rows(toy: dict) -> list[Row]:
+    """Theorem A.4's sigma step, as the appendix writes it (no entropy term: sigma shrinks to
+    0 along positive curvature) against the ELBO the book trains (sigma settles at
+    sqrt(c / (H + c lambda))), on the convex toy with the KL on. The effect is where sigma
+    settles minus the full ELBO's fixed point; the appendix's step predicts minus that
+    fixed point (sigma at 0). The interval is sigma's spread over the last quarter of the
+    steps (its stationary SD), a conservative one."""
+    rows = []
+    runs = toy["runs"]["softplus"]
+    for c, predicted, settled, sd in zip(
+        toy["kl_weights"],
+        toy["predicted_sigma"],
+        runs["settled_mean"],
+        runs["settled_sd"],
+        strict=True,
+    ):
+        if c <= 0:
+            continue
+        test = verdicts.estimate_test("stationary spread", settled - predicted, sd, 1)
+        rows.append(
+            judged(
+                "theorem.A.4",
+                "Theorem A.4",
+                "gradient descent shrinks sigma to 0 along positive curvature",
+                f"1-D convex toy, KL weight {c:g}, sigma = softplus(rho)",
+                "sigma -> 0",
+                -float(predicted),
+                f"sigma at 0: minus the fixed point with the entropy term ({predicted:.3f})",
+                test,
+                f"{int(toy['steps'][-1])} gradient steps",
+                "steps",
             )
         )
     return rows

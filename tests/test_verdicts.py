@@ -149,3 +149,18 @@ def test_the_committed_scorecard_gives_every_claim_one_verdict():
             assert r.decide  # the budget that would decide is named
         if r.verdict == verdicts.NOT_TESTABLE:
             assert r.test is None and r.decide  # the reason
+
+
+def test_the_sigma_law_row_tells_the_appendix_step_from_the_elbo_step():
+    def toy(settled):
+        return {
+            "kl_weights": [0.0, 0.05],
+            "predicted_sigma": [0.0, 0.218],
+            "steps": [0, 3000],
+            "runs": {"softplus": {"settled_mean": [0.01, settled], "settled_sd": [0.01, 0.002]}},
+        }
+
+    (at_fixed_point,) = claims.sigma_law_rows(toy(0.2187))
+    assert at_fixed_point.verdict == verdicts.CONTRADICTED  # sigma stays at sqrt(c/(H+c lambda))
+    (at_zero,) = claims.sigma_law_rows(toy(0.001))
+    assert at_zero.verdict == verdicts.REPRODUCED  # what the appendix's step predicts
