@@ -1,0 +1,434 @@
+"""Beyond Figures 4E and 5 (registered as ``populations``): individuals of several genomes,
+with enough episodes to tell them apart.
+
+Figures 4E and 5 rest on one genome whose 100 individuals played 3 episodes each; there
+a one-way ANOVA gives F(99, 200) = 1.13, p = 0.24, and the reliability of a 3-episode
+mean is about 0.1, so the r and the t of those figures measure episode noise. Here each
+genome of Figure 3 with 64 cell types (ours and the authors' settings, seeds 0, 1, 2 at
+``cpu``) gets 100 individuals that play E episodes each on the normal and the
+long-legged Ant, and its mean network plays the same initial states on the normal Ant.
+Actions are deterministic (tanh of the Gaussian mean).
+
+Initial states: individual i's episode e starts from state (i, e), the same in both
+bodies and for the mean network (``sgb.rl.population.population_returns`` with one seed
+per genome). A cheaper design would give the mean network one episode per episode index,
+all individuals sharing those E states (6 x (2 x 100 x 64 + 64) episodes); then the mean
+network's own episode noise would set the error of Figure 5's difference. On the committed ``fig5_ant_cpu.json`` the mean network's episode SD is
+about 990 and its return on a shared state correlates with an individual's at only
+r = 0.03, so with 64 shared states the difference's SE would be about 990 / sqrt(64) =
+124 a genome (and a paired t over individuals would leave that noise out). With the
+mean network on every state (i, e) the SE is about sqrt(sd_b^2 / 100 + 1367^2 / (100 E))
+= 32 at E = 32 (sd_b about 196, 1367 the SD of one episode's difference on the same
+committed file).
+
+Cost (measured on 2 CPU cores that 5 other CPU-bound processes shared, so per
+CPU-second): ``population_returns`` on the Ant (``spring``) steps 17,200 to 18,400
+envs per CPU-second at batches of 800 to 3,200 envs once compiled, for our genome, the
+authors' and the mean network alike (6,900 to 11,300 a wall-second at the 0.4 to 0.7 of
+a core the process got); compiling one program takes about 25 CPU-seconds, and there
+are 6 (3 parts x 2 network settings). The shared-state design, 6 x (2 x 100 x 64 + 64) x
+1000 = 77.2M env-steps, is 74 min of one core; this design at E = 64, 6 x 3 x 100 x 64 x
+1000 = 115.2M, 111 min. The ``cpu`` profile plays E = 32: 57.6M env-steps, about 58 min of
+one core plus 3 of compiling (E = 48 would take 86). At the committed Figure 4 ICC
+(normal 0.041, 95 % interval -0.068 to 0.167; long legs -0.048, -0.145 to 0.070), a
+32-episode mean has reliability 0.58 on the normal body (interval 0 to 0.87) and at
+most 0.71 on the long legs.
+
+Per genome the results file keeps every return, (N, E) per part (rounded to 0.001), the
+variance split and split-half reliability of each body, Figure 4E's r and Figure 5's
+paired difference; per genome settings, both pooled over its genomes. A finished part
+(a body's individuals, the mean network) is kept in the file, written after every part,
+and not evaluated again on a rerun.
+
+Pooled over a setting's genomes, the fixed-effect (inverse-variance) difference and the
+Fisher-z r speak for these genomes only. Whether the genomes of a setting differ is the
+random-effects check: Cochran's Q, the between-genome variance tau^2, and the Student-t
+interval over the genomes' estimates. With 3 genomes it has 2 degrees of freedom: it can
+show a spread far larger than the per-genome errors, not rule out one of their size, and
+its interval (t = 4.30) is what a claim about the setting's genomes in general must use.
+"""
+
+import math
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+from scipy import stats as scipy_stats
+
+from sgb import validation, verdicts
+from sgb.experiments import PROFILE_NAMES, check_profile
+from sgb.experiments.rl import SETTINGS, checkpoint_name, checkpoint_root, load_agent
+from sgb.provenance import earlier_results, git_commit, provenance, results_file, write_results
+from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.rl.population import population_returns
+
+BODIES = ("normal", "long_legs")
+PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body
+TARGET_RELIABILITY = 0.8
+DECIMALS = 3  # returns are kept to 0.001
+
+
+@dataclass(frozen=True)
+class Genome:
+    """One trained genome of Figure 3: its settings, cell types and training seed."""
+
+    settings: str
+    seed: int
+    cell_types: int = 64
+
+    def __post_init__(self) -> None:
+        validation.choice("settings", self.settings, SETTINGS)
+        validation.integer("seed", self.seed, minimum=0)
+
+
+@dataclass(frozen=True)
+class PopulationsConfig:
+    """Which genomes (checkpoints of Figure 3's ``source`` profile), and how many
+    individuals, episodes and steps; genome j draws its individuals and initial states
+    with seed ``seed + j``."""
+
+    genomes: tuple[Genome, ...]
+    n_individuals: int = 100
+    episodes: int = 32
+    episode_length: int = 1000
+    seed: int = 0
+    source: str = "cpu"
+
+    def __post_init__(self) -> None:
+        validation.instance("genomes", self.genomes, tuple)
+        validation.integer("n_individuals", self.n_individuals, minimum=4)  # r needs 4
+        validation.integer("episodes", self.episodes, minimum=2)  # the split needs 2
+        validation.integer("episode_length", self.episode_length)
+        validation.integer("seed", self.seed, minimum=0)
+        validation.choice("source", self.source, PROFILE_NAMES)
+
+
+def genome_label(genome: Genome, env: str = "ant") -> str:
+    """The genome's name in the results and the progress: e.g. ``ant_k64_authors_s1``."""
+    name = checkpoint_name(env, genome.cell_types, genome.seed, "cpu", genome.settings)
+    return name.removesuffix("_cpu.msgpack")
+
+
+def checkpoint_path(genome: Genome, config: PopulationsConfig, env: str = "ant") -> str:
+    """The genome's checkpoint, relative to a results directory."""
+    name = checkpoint_name(env, genome.cell_types, genome.seed, config.source, genome.settings)
+    return f"rl/checkpoints/{name}"
+
+
+def populations_config(profile: str) -> PopulationsConfig:
+    """The design at ``profile``: at ``smoke`` our seed-0 and seed-1 genomes (one network,
+    so one set of compiled programs), 4 individuals, 3 episodes of 50 steps; at ``cpu``
+    both settings, seeds 0 to 2, 100 individuals x 32 episodes of 1000 steps; at
+    ``paper`` seeds 0 to 4 of Figure 3's paper checkpoints, 64 episodes."""
+    check_profile(profile)
+    if profile == "smoke":
+        genomes = (Genome("ours", 0), Genome("ours", 1))
+        return PopulationsConfig(genomes, n_individuals=4, episodes=3, episode_length=50)
+    seeds = range(3) if profile == "cpu" else range(5)
+    genomes = tuple(Genome(settings, seed) for settings in SETTINGS for seed in seeds)
+    if profile == "cpu":
+        return PopulationsConfig(genomes)
+    return PopulationsConfig(genomes, episodes=64, source="paper")
+
+
+PROFILES = {p: populations_config(p) for p in PROFILE_NAMES}
+
+
+# Per genome -----------------------------------------------------------------------------
+
+
+def split_half(returns: np.ndarray) -> dict:
+    """Test-retest reliability measured directly: r across individuals between the means
+    of the even and the odd episodes (2 h of them, h = E // 2; returns (N, E), N >= 4), its
+    Fisher-z interval, and the Spearman-Brown reliability of a 2h-episode mean,
+    2r / (1 + r), with the interval's ends transformed alike."""
+    x = np.asarray(returns, dtype=np.float64)
+    half = x.shape[1] // 2
+    test = verdicts.fisher_r(x[:, 0 : 2 * half : 2].mean(1), x[:, 1 : 2 * half : 2].mean(1))
+
+    def brown(r: float) -> float:
+        return 2 * r / (1 + r)
+
+    return {
+        "episodes": 2 * half,
+        "r": test.estimate,
+        "r_ci": (test.low, test.high),
+        "reliability": brown(test.estimate),
+        "reliability_ci": (brown(test.low), brown(test.high)),
+    }
+
+
+def body_summary(returns: np.ndarray, target: float = TARGET_RELIABILITY) -> dict:
+    """One body's returns (N, E): the mean return; the one-way variance split (between and
+    within variance, return^2; ICC and the E-episode reliability, 95 % F intervals); the
+    episodes a mean needs to reach ``target``; the split-half reliability; and, if the
+    reliability is below ``target``, the upper bound on the SD between individuals
+    (return units and percent of the mean return)."""
+    x = np.asarray(returns, dtype=np.float64)
+    split = variance_split(x)
+    mean = float(x.mean())
+    out = {
+        "mean_return": mean,
+        "variance_split": split._asdict(),
+        "between_sd": math.sqrt(split.between_var),
+        "within_sd": math.sqrt(split.within_var),
+        "episodes_for_target": episodes_for(split.icc, target),
+        "split_half": split_half(x),
+    }
+    if split.reliability < target:
+        bound = between_sd_bound(split)
+        out["between_sd_bound"] = bound
+        out["between_sd_bound_percent"] = 100 * bound / abs(mean)
+    return out
+
+
+def legs_correlation(normal: np.ndarray, long_legs: np.ndarray) -> dict:
+    """Figure 4E: Pearson r of the individuals' E-episode means on the two bodies (N, E)
+    each, Fisher-z 95 % interval; and, secondary, r divided by sqrt(rel_normal x
+    rel_long) (the ANOVA reliabilities; None when either is <= 0), with the interval's
+    ends divided alike (the reliabilities' own uncertainty left out)."""
+    normal, long_legs = np.asarray(normal), np.asarray(long_legs)
+    test = verdicts.fisher_r(normal.mean(1), long_legs.mean(1))
+    rel = [variance_split(x).reliability for x in (normal, long_legs)]
+    factor = math.sqrt(rel[0] * rel[1]) if min(rel) > 0 else math.nan
+    return {
+        "test": test._asdict(),
+        "reliabilities": rel,
+        "disattenuated": test.estimate / factor,
+        "disattenuated_ci": (test.low / factor, test.high / factor),
+    }
+
+
+def mean_network_difference(individuals: np.ndarray, mean_network: np.ndarray) -> dict:
+    """Figure 5: per individual, the mean over its episodes of its return minus the mean
+    network's on the same initial state (both (N, E)); their mean with a paired-t 95 %
+    interval and standard error (return units), and as percent of the mean network's
+    mean return."""
+    ind, net = np.asarray(individuals), np.asarray(mean_network)
+    if ind.shape != net.shape:
+        raise ValueError(f"individuals {ind.shape} and mean network {net.shape} must match")
+    test = verdicts.paired(ind.mean(1), net.mean(1))
+    base = float(net.mean())
+    se = float(np.std(ind.mean(1) - net.mean(1), ddof=1) / math.sqrt(ind.shape[0]))
+    return {
+        "test": test._asdict(),
+        "se": se,
+        "mean_network_return": base,
+        "percent": 100 * test.estimate / base,
+        "percent_ci": (100 * test.low / base, 100 * test.high / base),
+        "percent_se": 100 * se / abs(base),
+    }
+
+
+def genome_summary(returns: dict) -> dict:
+    """Everything above for one genome's returns ``{part: (N, E)}``."""
+    arrays = {part: np.asarray(returns[part], dtype=np.float64) for part in PARTS}
+    return {
+        **{body: body_summary(arrays[body]) for body in BODIES},
+        "legs": legs_correlation(arrays["normal"], arrays["long_legs"]),
+        "mean_network": mean_network_difference(arrays["normal"], arrays["mean_network"]),
+    }
+
+
+# Pooled over the genomes of one setting --------------------------------------------------
+
+
+def inverse_variance(estimates, ses) -> dict:
+    """Fixed-effect pooling of per-genome ``estimates`` with standard errors ``ses``
+    (weights 1 / se^2): the pooled estimate, its SE and normal 95 % interval; Cochran's Q
+    (k - 1 dof) with its p and I^2; the DerSimonian-Laird between-genome variance tau^2
+    and the random-effects estimate (weights 1 / (se^2 + tau^2)) with its interval."""
+    x = np.asarray(estimates, dtype=np.float64)
+    w = 1 / np.asarray(ses, dtype=np.float64) ** 2
+    crit = scipy_stats.norm.ppf(0.5 + verdicts.LEVEL / 2)
+    pooled, se = float((w * x).sum() / w.sum()), float(1 / math.sqrt(w.sum()))
+    q, dof = float((w * (x - pooled) ** 2).sum()), x.size - 1
+    tau2 = max(0.0, (q - dof) / (w.sum() - (w**2).sum() / w.sum())) if dof > 0 else math.nan
+    w_re = 1 / (1 / w + (tau2 if dof > 0 else 0.0))
+    random, se_re = float((w_re * x).sum() / w_re.sum()), float(1 / math.sqrt(w_re.sum()))
+    return {
+        "estimate": pooled,
+        "se": se,
+        "ci": (pooled - crit * se, pooled + crit * se),
+        "q": q,
+        "q_dof": dof,
+        "q_p": float(scipy_stats.chi2.sf(q, dof)) if dof > 0 else math.nan,
+        "i2": max(0.0, (q - dof) / q) if q > 0 else 0.0,
+        "tau2": tau2,
+        "random_effects": random,
+        "random_effects_se": se_re,
+        "random_effects_ci": (random - crit * se_re, random + crit * se_re),
+    }
+
+
+def between_genomes(estimates) -> dict:
+    """The spread of per-genome ``estimates``: their mean, SD and Student-t 95 % interval
+    over genomes (k - 1 dof): what a claim about genomes of this setting in general can
+    lean on. With 3 genomes that is 2 dof (t = 4.30): only a spread far above the
+    estimates' own errors shows, and the interval is wide."""
+    x = np.asarray(estimates, dtype=np.float64)
+    if x.size < 2:
+        return {"n_genomes": 1, "mean": float(x[0]), "sd": math.nan, "ci": (math.nan, math.nan)}
+    mean, low, high = (float(v) for v in _t_interval(x))
+    return {"n_genomes": int(x.size), "mean": mean, "sd": float(x.std(ddof=1)), "ci": (low, high)}
+
+
+def between_genomes_r(rs) -> dict:
+    """``between_genomes`` of correlations, on Fisher's z: the mean and interval back on
+    the r scale, the SD (``z_sd``) on the z scale."""
+    z = np.arctanh(np.clip(np.asarray(rs, dtype=np.float64), -1 + 1e-12, 1 - 1e-12))
+    out = between_genomes(z)
+    out["z_sd"] = out.pop("sd")
+    out["mean"], out["ci"] = math.tanh(out["mean"]), tuple(np.tanh(out["ci"]).tolist())
+    return out
+
+
+def _t_interval(x: np.ndarray) -> tuple[float, float, float]:
+    half = scipy_stats.t.ppf(0.5 + verdicts.LEVEL / 2, x.size - 1) * x.std(ddof=1)
+    return x.mean(), x.mean() - half / math.sqrt(x.size), x.mean() + half / math.sqrt(x.size)
+
+
+def pooled_r(rs, ns) -> dict:
+    """Per-genome correlations ``rs`` of ``ns`` pairs pooled by Fisher z (weights n - 3):
+    ``inverse_variance`` on z, with the estimate and intervals back on the r scale."""
+    z = np.arctanh(np.clip(np.asarray(rs, dtype=np.float64), -1 + 1e-12, 1 - 1e-12))
+    pooled = inverse_variance(z, 1 / np.sqrt(np.asarray(ns, dtype=np.float64) - 3))
+    out = {"z_se": pooled.pop("se"), "random_effects_z_se": pooled.pop("random_effects_se")}
+    for key in ("estimate", "random_effects"):
+        pooled[key] = math.tanh(pooled[key])
+    for key in ("ci", "random_effects_ci"):
+        pooled[key] = tuple(math.tanh(v) for v in pooled[key])
+    return {**pooled, **out}
+
+
+def pool_setting(summaries: list[dict]) -> dict:
+    """Figure 5's difference (return units and percent of the mean network) and Figure
+    4E's r pooled over the genome ``summaries`` of one setting, each with the spread over
+    genomes beside the pooled value."""
+    diffs = [s["mean_network"] for s in summaries]
+    legs = [s["legs"]["test"] for s in summaries]
+    measures = {
+        "mean_network_difference": ([d["test"]["estimate"] for d in diffs], "se"),
+        "mean_network_percent": ([d["percent"] for d in diffs], "percent_se"),
+    }
+    out: dict = {"n_genomes": len(summaries)}
+    for key, (values, se) in measures.items():
+        out[key] = {
+            "fixed_effect": inverse_variance(values, [d[se] for d in diffs]),
+            "between_genomes": between_genomes(values),
+        }
+    rs = [t["estimate"] for t in legs]
+    out["legs_r"] = {
+        "fixed_effect": pooled_r(rs, [t["n"] for t in legs]),
+        "between_genomes": between_genomes_r(rs),
+    }
+    return out
+
+
+# Evaluation and the results file ---------------------------------------------------------
+
+
+def eta_s(elapsed_s: float, done_steps: int, remaining_steps: int) -> float:
+    """Seconds left at the rate so far (``nan`` before any step is done)."""
+    return remaining_steps * elapsed_s / done_steps if done_steps else math.nan
+
+
+def _clock(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "unknown until the first part ends"
+    return f"{seconds / 60:.0f} min" if seconds >= 90 else f"{seconds:.0f} s"
+
+
+def evaluate_part(agent: tuple, part: str, config: PopulationsConfig, seed: int) -> np.ndarray:
+    """Returns (N, E) of one part: the individuals on a body, or the mean network on the
+    normal body; ``agent``: (PPO settings, actor parameters, normalizer)."""
+    ppo, actor, normalizer = agent
+    body = "normal" if part == "mean_network" else part
+    returns = population_returns(
+        replace(ppo.env, variant=body),
+        ppo.network,
+        actor,
+        normalizer,
+        config.n_individuals,
+        config.episodes,
+        config.episode_length,
+        seed=seed,
+        mean_network=part == "mean_network",
+    )
+    return np.round(np.asarray(returns, dtype=np.float64), DECIMALS)
+
+
+def summarise(results: dict, config: PopulationsConfig) -> dict:
+    """``results`` with every finished genome's summary, the pooled summaries of every
+    setting, and whether the design is complete."""
+    genomes = results["genomes"]
+    done = [g for g in genomes.values() if set(PARTS) <= set(g["parts"])]
+    for record in done:
+        record["summary"] = genome_summary({p: record["parts"][p]["returns"] for p in PARTS})
+    results["pooled"] = {
+        settings: pool_setting([g["summary"] for g in done if g["settings"] == settings])
+        for settings in SETTINGS
+        if any(g["settings"] == settings for g in done)
+    }
+    results["complete"] = len(done) == len(config.genomes)
+    return results
+
+
+def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
+    """Evaluate every genome's parts that the results file does not hold yet, writing
+    ``rl/populations_<env>_<profile>.json`` after each; returns its path."""
+    if env != "ant":
+        raise ValueError(f"env must be 'ant' for populations (the Ant's bodies), got {env!r}")
+    config = populations_config(profile)
+    path = results_file(Path(out_dir) / "rl", f"populations_{env}", profile)
+    results = earlier_results(path, config) or {"env": env, "genomes": {}}
+    plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in PARTS]
+    steps = config.n_individuals * config.episodes * config.episode_length
+    todo = [item for item in plan if not _has(results, item[1], item[2], env)]
+    start = time.perf_counter()
+    agents: dict[str, tuple] = {}
+    for k, (j, genome, part) in enumerate(todo):
+        label = genome_label(genome, env)
+        eta = eta_s(time.perf_counter() - start, k * steps, (len(todo) - k) * steps)
+        count = plan.index((j, genome, part)) + 1
+        print(f"populations {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
+        checkpoint = checkpoint_path(genome, config, env)
+        if label not in agents:
+            agents = {label: load_agent(checkpoint_root(out_dir, checkpoint) / checkpoint)}
+        tic = time.perf_counter()
+        returns = evaluate_part(agents[label], part, config, config.seed + j)
+        wall = time.perf_counter() - tic
+        record = results["genomes"].setdefault(label, _new_record(genome, j, config, env))
+        record["parts"][part] = {
+            "returns": returns,
+            "wall_time_s": round(wall, 2),
+            "env_steps_per_s": round(steps / wall, 1),
+            "git_commit": git_commit(),
+        }
+        _write(path, summarise(results, config), config, profile)
+    if not todo:
+        print(f"populations: every part is in {path}; nothing evaluated", flush=True)
+    return _write(path, summarise(results, config), config, profile)
+
+
+def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> dict:
+    return {
+        "settings": genome.settings,
+        "training_seed": genome.seed,
+        "evaluation_seed": config.seed + j,
+        "checkpoint": checkpoint_path(genome, config, env),
+        "parts": {},
+    }
+
+
+def _has(results: dict, genome: Genome, part: str, env: str) -> bool:
+    return part in results["genomes"].get(genome_label(genome, env), {}).get("parts", {})
+
+
+def _write(path: Path, results: dict, config: PopulationsConfig, profile: str) -> Path:
+    parts = [p for g in results["genomes"].values() for p in g["parts"].values()]
+    seeds = sorted(g["evaluation_seed"] for g in results["genomes"].values())
+    record = provenance(config, profile, seeds, sum(p["wall_time_s"] for p in parts))
+    record["git_commits"] = sorted({p["git_commit"] for p in parts})
+    return write_results(path, results, record)

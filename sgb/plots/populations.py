@@ -1,0 +1,113 @@
+"""Figures of the ``populations`` experiment (``sgb.experiments.populations``): how well
+the episodes tell a genome's individuals apart, Figure 4E's scatter with its error bars,
+and Figure 5's difference per genome and pooled."""
+
+import numpy as np
+
+from sgb import stats
+from sgb.plots import PALETTE, subplots
+from sgb.verdicts import fisher_r
+
+BODY_STYLE = {"normal": ("sgb", "o", "normal legs"), "long_legs": ("dgb", "s", "long legs")}
+SETTINGS_COLOR = {"ours": "sgb", "authors": "authors"}
+
+
+def _finished(genomes: dict) -> dict:
+    """The genome records (label -> record) that have their summary."""
+    return {label: g for label, g in genomes.items() if "summary" in g}
+
+
+def plot_icc(genomes: dict, ax=None):
+    """Per genome (one row each), the one-episode ICC of each body with its 95 % F
+    interval; ``genomes``: the results' ``"genomes"`` (label -> record)."""
+    if ax is None:
+        _, ax = subplots()
+    done = _finished(genomes)
+    rows = np.arange(len(done))
+    offsets = (-0.12, 0.12)
+    for offset, (body, (color, marker, label)) in zip(offsets, BODY_STYLE.items(), strict=True):
+        splits = [g["summary"][body]["variance_split"] for g in done.values()]
+        icc = np.array([s["icc"] for s in splits])
+        low, high = (np.array([s["icc_ci"][i] for s in splits]) for i in (0, 1))
+        ax.errorbar(
+            icc,
+            rows + offset,
+            xerr=[icc - low, high - icc],
+            fmt=marker,
+            capsize=3,
+            color=PALETTE[color],
+            label=label,
+        )
+    ax.axvline(0.0, color=PALETTE["baseline"], ls="--", lw=1)
+    ax.set_yticks(rows, list(done))
+    ax.invert_yaxis()
+    episodes = next(iter(done.values()))["summary"]["normal"]["variance_split"]["episodes"]
+    ax.set_xlabel(f"ICC of one episode (95 % interval; {episodes} episodes each)")
+    ax.legend(loc="best", fontsize=8)
+    return ax
+
+
+def plot_legs(normal, long_legs, ax=None):
+    """Each individual's mean return on the normal vs the long-legged body (``normal``,
+    ``long_legs``: (N, E)), the SEM over its episodes as bars; r with its Fisher-z
+    interval in the title."""
+    if ax is None:
+        _, ax = subplots()
+    x, y = np.asarray(normal), np.asarray(long_legs)
+    ax.errorbar(
+        x.mean(1),
+        y.mean(1),
+        xerr=stats.sem(x, axis=1),
+        yerr=stats.sem(y, axis=1),
+        fmt="o",
+        ms=3,
+        alpha=0.6,
+        elinewidth=0.6,
+        color=PALETTE["individuals"],
+    )
+    r = fisher_r(x.mean(1), y.mean(1))
+    ax.set_xlabel(f"mean return of {x.shape[1]} episodes, normal legs")
+    ax.set_ylabel(f"mean return of {y.shape[1]} episodes, long legs")
+    ax.set_title(f"r = {r.estimate:.2f} (95 % interval {r.low:.2f} to {r.high:.2f}, n = {r.n})")
+    return ax
+
+
+def plot_differences(results: dict, ax=None):
+    """Figure 5 per genome: the individuals' return minus the mean network's, in percent
+    of the mean network's, with its paired 95 % interval; below, each setting's pooled
+    value (fixed effect, filled) and the interval over its genomes (Student t, open)."""
+    if ax is None:
+        _, ax = subplots()
+    done = _finished(results["genomes"])
+    labels = list(done)
+    for row, g in enumerate(done.values()):
+        d = g["summary"]["mean_network"]
+        color = PALETTE[SETTINGS_COLOR[g["settings"]]]
+        _interval(ax, row, d["percent"], d["percent_ci"], color, "o", True)
+    for settings, pooled in results.get("pooled", {}).items():
+        color = PALETTE[SETTINGS_COLOR[settings]]
+        percent = pooled["mean_network_percent"]
+        fixed, spread = percent["fixed_effect"], percent["between_genomes"]
+        _interval(ax, len(labels), fixed["estimate"], fixed["ci"], color, "D", True)
+        labels.append(f"{settings}, pooled ({pooled['n_genomes']} genomes)")
+        _interval(ax, len(labels), spread["mean"], spread["ci"], color, "D", False)
+        labels.append(f"{settings}, over genomes")
+    ax.axvline(0.0, color=PALETTE["mean_network"], ls="--", lw=1, label="mean network")
+    ax.set_yticks(range(len(labels)), labels)
+    ax.invert_yaxis()
+    ax.set_xlabel("individuals - mean network, % of its return (95 % intervals)")
+    ax.legend(loc="best", fontsize=8)
+    return ax
+
+
+def _interval(ax, row: int, value: float, ci, color: str, marker: str, filled: bool) -> None:
+    low, high = (np.nan if v is None else v for v in ci)
+    ax.errorbar(
+        [value],
+        [row],
+        xerr=[[value - low], [high - value]],
+        fmt=marker,
+        capsize=3,
+        color=color,
+        mfc=color if filled else "none",
+    )

@@ -1,0 +1,177 @@
+"""The populations experiment: its summaries on returns of known between and within
+variance, its pooling, and a smoke run end to end that resumes without evaluating again."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy import stats as scipy_stats
+
+from sgb.experiments import populations
+from sgb.paths import committed_results
+from sgb.provenance import _jsonable, read_results
+
+
+def _population(rng, n: int, episodes: int, sd_between: float, sd_within: float, mean=10.0):
+    """Returns (n, episodes): individual i's level mean + b_i, b_i ~ N(0, sd_between^2),
+    plus episode noise N(0, sd_within^2)."""
+    levels = mean + rng.normal(0, sd_between, (n, 1))
+    return levels + rng.normal(0, sd_within, (n, episodes))
+
+
+def test_the_split_recovers_a_known_icc_and_reliability():
+    rng = np.random.default_rng(0)
+    # ICC 1 / (1 + 4) = 0.2; a 32-episode mean: 32 x 0.2 / (1 + 31 x 0.2) = 0.89
+    summary = populations.body_summary(_population(rng, 400, 32, 1.0, 2.0))
+    split = summary["variance_split"]
+    assert split["icc_ci"][0] < 0.2 < split["icc_ci"][1]
+    assert split["reliability"] == pytest.approx(32 * 0.2 / 7.2, abs=0.03)
+    assert split["between_var"] == pytest.approx(1.0, rel=0.25)
+    assert split["within_var"] == pytest.approx(4.0, rel=0.05)
+    # measured directly, the two halves' means agree as the ANOVA predicts
+    assert summary["split_half"]["episodes"] == 32
+    assert summary["split_half"]["reliability"] == pytest.approx(split["reliability"], abs=0.05)
+    assert "between_sd_bound" not in summary  # reliable enough: no bound is needed
+    assert summary["episodes_for_target"] == pytest.approx(16, rel=0.3)
+
+
+def test_an_unreliable_measurement_bounds_the_sd_between_individuals():
+    rng = np.random.default_rng(1)
+    held = 0
+    for _ in range(100):
+        x = _population(rng, 100, 4, 1.0, 2.0, mean=50.0)  # reliability of 4 episodes: 0.5
+        summary = populations.body_summary(x)
+        held += summary["between_sd_bound"] >= 1.0  # the true SD between individuals
+    assert held >= 93  # an upper 97.5 % bound
+    assert summary["variance_split"]["reliability"] < 0.8
+    assert summary["between_sd_bound_percent"] == pytest.approx(
+        100 * summary["between_sd_bound"] / x.mean()
+    )
+    assert summary["split_half"]["episodes"] == 4
+
+
+def test_the_legs_r_is_disattenuated_by_both_reliabilities():
+    rng = np.random.default_rng(2)
+    skill = rng.normal(0, 1, (300, 1))
+    normal = skill + rng.normal(0, 2, (300, 8))
+    long_legs = skill + rng.normal(0, 2, (300, 8))
+    legs = populations.legs_correlation(normal, long_legs)
+    rel = legs["reliabilities"]  # about 8 x 0.2 / 2.4 = 0.67 each
+    assert legs["test"]["low"] < math.sqrt(rel[0] * rel[1]) < legs["test"]["high"]
+    factor = math.sqrt(rel[0] * rel[1])
+    assert legs["disattenuated"] == pytest.approx(legs["test"]["estimate"] / factor)
+    assert 0.75 < legs["disattenuated"] < 1.25  # the true abilities are the same on both bodies
+
+
+def test_the_paired_difference_covers_the_truth():
+    rng = np.random.default_rng(3)
+    covered, truth = 0, 3.0
+    for _ in range(200):
+        state = rng.normal(0, 5, (50, 6))  # what the shared initial state does to both
+        net = 100 + state + rng.normal(0, 4, (50, 6))
+        ind = 100 + truth + rng.normal(0, 2, (50, 1)) + state + rng.normal(0, 4, (50, 6))
+        diff = populations.mean_network_difference(ind, net)
+        covered += diff["test"]["low"] <= truth <= diff["test"]["high"]
+    assert 0.91 <= covered / 200 <= 0.99
+    assert diff["percent"] == pytest.approx(100 * diff["test"]["estimate"] / net.mean())
+    assert diff["se"] == pytest.approx(np.std((ind - net).mean(1), ddof=1) / math.sqrt(50))
+    with pytest.raises(ValueError, match="must match"):
+        populations.mean_network_difference(ind, net[:, :3])
+
+
+def test_the_pooled_difference_is_the_inverse_variance_mean():
+    estimates, ses = np.array([1.0, 2.0, 4.0]), np.array([1.0, 0.5, 2.0])
+    w = 1 / ses**2
+    pooled = populations.inverse_variance(estimates, ses)
+    assert pooled["estimate"] == pytest.approx((w * estimates).sum() / w.sum())
+    assert pooled["se"] == pytest.approx(1 / math.sqrt(w.sum()))
+    assert pooled["ci"][1] - pooled["estimate"] == pytest.approx(1.959964 * pooled["se"])
+    assert pooled["q"] == pytest.approx((w * (estimates - pooled["estimate"]) ** 2).sum())
+    # genomes that agree: no spread between them, random effects = fixed effect
+    same = populations.inverse_variance([2.0, 2.0, 2.0], ses)
+    assert same["tau2"] == 0.0 and same["random_effects"] == pytest.approx(same["estimate"])
+    # genomes far apart: a spread, and a wider random-effects interval
+    apart = populations.inverse_variance([0.0, 10.0, 20.0], [1.0, 1.0, 1.0])
+    assert apart["tau2"] == pytest.approx(100 - 1)  # DerSimonian-Laird: var of the 3 - se^2
+    assert apart["random_effects_se"] > 5 * apart["se"]
+    spread = populations.between_genomes([0.0, 10.0, 20.0])
+    half = scipy_stats.t.ppf(0.975, 2) * 10 / math.sqrt(3)
+    assert spread["ci"] == pytest.approx((10 - half, 10 + half))
+
+
+def test_a_setting_pools_its_genomes_summaries():
+    rng = np.random.default_rng(4)
+    summaries = []
+    for shift in (1.0, 2.0, 3.0):
+        net = rng.normal(100, 5, (40, 4))
+        returns = {
+            "normal": net + shift + rng.normal(0, 1, (40, 1)),
+            "long_legs": rng.normal(80, 5, (40, 4)),
+            "mean_network": net,
+        }
+        summaries.append(populations.genome_summary(returns))
+    pooled = populations.pool_setting(summaries)
+    d = [s["mean_network"] for s in summaries]
+    w = np.array([1 / s["se"] ** 2 for s in d])
+    values = np.array([s["test"]["estimate"] for s in d])
+    fixed = pooled["mean_network_difference"]["fixed_effect"]
+    assert fixed["estimate"] == pytest.approx((w * values).sum() / w.sum())
+    assert pooled["mean_network_difference"]["between_genomes"]["mean"] == pytest.approx(
+        values.mean()
+    )
+    # r pooled on Fisher's z with weights n - 3: equal n, the mean of the z's
+    rs = [s["legs"]["test"]["estimate"] for s in summaries]
+    assert pooled["legs_r"]["fixed_effect"]["estimate"] == pytest.approx(
+        math.tanh(np.mean(np.arctanh(rs)))
+    )
+    assert pooled["legs_r"]["fixed_effect"]["z_se"] == pytest.approx(1 / math.sqrt(3 * 37))
+
+
+def test_the_profiles_name_committed_checkpoints():
+    cpu = populations.PROFILES["cpu"]
+    assert len(cpu.genomes) == 6 and {g.settings for g in cpu.genomes} == {"ours", "authors"}
+    assert (cpu.n_individuals, cpu.episodes, cpu.episode_length) == (100, 32, 1000)
+    for genome in cpu.genomes:
+        assert (committed_results() / populations.checkpoint_path(genome, cpu)).exists()
+    labels = [populations.genome_label(g) for g in cpu.genomes]
+    assert labels[0] == "ant_k64_s0" and labels[-1] == "ant_k64_authors_s2"
+    assert populations.eta_s(10.0, 100, 300) == 30.0
+    with pytest.raises(ValueError, match="env"):
+        populations.run("smoke", ".", env="halfcheetah")
+
+
+def test_a_smoke_run_resumes_without_evaluating_again(tmp_path, monkeypatch, capsys):
+    path = populations.run("smoke", tmp_path)
+    assert "populations ant_k64_s0 long_legs (2/6)" in capsys.readouterr().out
+    payload = read_results(path)
+    results = payload["results"]
+    assert results["complete"] and set(results["genomes"]) == {"ant_k64_s0", "ant_k64_s1"}
+    for record in results["genomes"].values():
+        for part in populations.PARTS:
+            assert np.asarray(record["parts"][part]["returns"]).shape == (4, 3)
+        returns = {p: record["parts"][p]["returns"] for p in populations.PARTS}
+        recomputed = json.loads(json.dumps(_jsonable(populations.genome_summary(returns))))
+        assert record["summary"] == recomputed  # the summary is the stored returns' own
+    assert results["pooled"]["ours"]["n_genomes"] == 2
+    before = path.read_bytes()
+
+    calls = []
+    real = populations.population_returns
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get("mean_network"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(populations, "population_returns", counted)
+    populations.run("smoke", tmp_path)
+    assert calls == [] and path.read_bytes() == before
+    assert "nothing evaluated" in capsys.readouterr().out
+
+    # a part lost (a run killed after writing the others) is the only one evaluated again
+    lost = payload["results"]["genomes"]["ant_k64_s1"]["parts"].pop("long_legs")
+    path.write_text(json.dumps(payload))
+    populations.run("smoke", tmp_path)
+    assert calls == [False]
+    again = read_results(path)["results"]["genomes"]["ant_k64_s1"]["parts"]["long_legs"]
+    assert again["returns"] == lost["returns"]  # the same individuals and initial states
