@@ -13,7 +13,8 @@ Initial states: individual i's episode e starts from state (i, e), the same in b
 bodies and for the mean network (``sgb.rl.population.population_returns`` with one seed
 per genome). A cheaper design would give the mean network one episode per episode index,
 all individuals sharing those E states (6 x (2 x 100 x 64 + 64) episodes); then the mean
-network's own episode noise would set the error of Figure 5's difference. On the committed ``fig5_ant_cpu.json`` the mean network's episode SD is
+network's own episode noise would set the error of Figure 5's difference. On the
+committed ``fig5_ant_cpu.json`` the mean network's episode SD is
 about 990 and its return on a shared state correlates with an individual's at only
 r = 0.03, so with 64 shared states the difference's SE would be about 990 / sqrt(64) =
 124 a genome (and a paired t over individuals would leave that noise out). With the
