@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy import stats as scipy_stats
 
 from sgb import verdicts
 from sgb.provenance import read_results
@@ -428,6 +429,97 @@ def figure5_rows(fig5: dict) -> list[Row]:
     return [ours, theirs]
 
 
+def _pooled_test(name: str, pooled: dict, n: int, transform=None) -> verdicts.Test:
+    """A random-effects pooled estimate (DerSimonian-Laird, normal interval) as a ``Test``;
+    ``transform`` maps Fisher's z back to r where the pooling was on z."""
+    estimate, (low, high) = pooled["random_effects"], pooled["random_effects_ci"]
+    se = pooled.get("random_effects_se", pooled.get("random_effects_z_se"))
+    z = (math.atanh(estimate) if transform else estimate) / se
+    detectable = 2.8 * se if transform is None else transform(2.8 * se)
+    p = float(2 * scipy_stats.norm.sf(abs(z)))
+    return verdicts.Test(name, estimate, low, high, math.inf, p, detectable, n)
+
+
+def populations_rows(results: dict) -> list[Row]:
+    """Figures 4E and 5 on several genomes per genome settings (``sgb.experiments.
+    populations``), pooled over the genomes by random effects. Figure 4E's r is compared
+    with the paper's as this measurement sees it, attenuated by the bodies' mean
+    reliabilities."""
+    rows = []
+    for settings, pooled in results["pooled"].items():
+        done = [
+            g["summary"]
+            for g in results["genomes"].values()
+            if g["settings"] == settings and "summary" in g
+        ]
+        n_genomes = len(done)
+        episodes = len(next(iter(results["genomes"].values()))["parts"]["normal"]["returns"][0])
+        who = "our" if settings == "ours" else "the authors'"
+        budget = f"{n_genomes} genomes x 100 individuals x {episodes} episodes"
+        label = f"ant, {who} genome, 64 types, {n_genomes} genomes pooled (random effects)"
+        diff = _pooled_test("pooled z", pooled["mean_network_percent"]["fixed_effect"], n_genomes)
+        rows.append(
+            judged(
+                "fig5.population_beats_mean",
+                "Figure 5",
+                "sampled individuals outperform the mean network",
+                label + ", % of the mean network's return",
+                "t(99) = 12",
+                1.0,
+                "about 1 % of the return, as the authors' plot data imply",
+                diff,
+                budget,
+                "genomes",
+            )
+        )
+        rels = [
+            max(g["normal"]["variance_split"]["reliability"], 0.0)
+            * max(g["long_legs"]["variance_split"]["reliability"], 0.0)
+            for g in done
+        ]
+        attenuation = float(np.mean(np.sqrt(rels)))
+        r = _pooled_test(
+            "pooled Fisher z", pooled["legs_r"]["fixed_effect"], 100 * n_genomes, math.tanh
+        )
+        claim = "individuals' returns on normal and long legs are positively correlated"
+        if attenuation > 0:
+            paper = 0.64 * attenuation
+            basis = f"0.64 as seen at these reliabilities: 0.64 x {attenuation:.2f} = {paper:.2f}"
+            rows.append(
+                judged(
+                    "fig4e.r_legs",
+                    "Figure 4E",
+                    claim,
+                    label,
+                    "r = 0.64",
+                    paper,
+                    basis,
+                    r,
+                    budget,
+                    "individuals",
+                )
+            )
+        else:
+            bound = max(g["normal"].get("between_sd_bound_percent", 0.0) for g in done)
+            rows.append(
+                Row(
+                    "fig4e.r_legs",
+                    "Figure 4E",
+                    claim,
+                    label,
+                    "r = 0.64",
+                    0.0,
+                    "0.64 attenuated by a reliability of 0: nothing observable",
+                    r,
+                    budget,
+                    verdicts.INCONCLUSIVE,
+                    f"individuals that differ: their SD is below {bound:.1f} % of "
+                    "the return on the normal body",
+                )
+            )
+    return rows
+
+
 # Theorems ---------------------------------------------------------------------------------
 
 
@@ -524,6 +616,9 @@ def scorecard(results_dir: Path) -> list[Row]:
     fig5 = results_dir / "rl" / "fig5_ant_cpu.json"
     if fig5.exists():
         rows += figure5_rows(read_results(fig5)["results"])
+    populations = results_dir / "rl" / "populations_ant_cpu.json"
+    if populations.exists():
+        rows += populations_rows(read_results(populations)["results"])
     theory = results_dir / "theory_cpu.json"
     if theory.exists():
         rows += theorem_rows(read_results(theory)["results"])
