@@ -3,7 +3,9 @@
 #   make test   ruff, every notebook and the unit tests (nbmake; the chapters first, so the
 #               longest items start early on the workers; tests marked with one xdist_group
 #               run on one worker, where they share compiled programs)
-#   make reproduce EXPERIMENT=... ARGS=...   one experiment, in the same environment
+#   make reproduce EXPERIMENT=... ARGS=...   one experiment, in the same environment (results
+#               in $SGB_RESULTS, else ./sgb-results; ARGS=--maintainer-write-committed writes
+#               the committed results/ instead)
 
 PYTHON ?= python3
 VENV := .venv
@@ -21,8 +23,8 @@ export SGB_PROFILE := smoke
 venv: $(STAMP)
 
 $(STAMP): requirements.txt pyproject.toml
-	$(PYTHON) -c 'import sys; sys.exit(not (3, 11) <= sys.version_info[:2] <= (3, 12))' \
-	    || { echo "the book needs Python 3.11 or 3.12: make PYTHON=python3.12 ..."; exit 1; }
+	$(PYTHON) -c 'import sys; sys.exit(not (3, 11) <= sys.version_info[:2] <= (3, 13))' \
+	    || { echo "the book needs Python 3.11, 3.12 or 3.13: make PYTHON=python3.13 ..."; exit 1; }
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --disable-pip-version-check -q -r requirements.txt
 	$(BIN)/python -m pip install --disable-pip-version-check -q --no-deps -e '.[book,test]'
@@ -38,7 +40,7 @@ book: venv
 	XLA_FLAGS="$$($(BIN)/python -c 'import conftest, os; print(os.environ["XLA_FLAGS"])')" \
 	    $(BIN)/jupyter-book build . -W --keep-going
 
-# make reproduce EXPERIMENT=fig3 ARGS="--profile cpu --env ant"
+# make reproduce EXPERIMENT=fig3 ARGS="--profile cpu --env ant"   (python -m sgb reproduce --help)
 reproduce: venv
 	$(BIN)/python -m sgb reproduce $(EXPERIMENT) $(ARGS)
 

@@ -1,41 +1,178 @@
-"""Command line: ``python -m sgb reproduce EXPERIMENT --profile smoke|cpu|paper [options]``."""
+"""Command line: ``python -m sgb reproduce EXPERIMENT --profile smoke|cpu|paper [options]``.
+
+Results go to ``--out-dir``, else ``$SGB_RESULTS``, else ``./sgb-results``. The committed
+results (``sgb.paths.committed_results()``) are written only with
+``--maintainer-write-committed``; an ``--out-dir`` inside them is refused without it.
+"""
 
 import argparse
 import inspect
+import os
 import sys
+import textwrap
 from collections.abc import Callable
 from pathlib import Path
 
 from sgb.divergence import TrainingDiverged
 from sgb.experiments import EXPERIMENTS, PROFILE_NAMES, get_experiment
+from sgb.paths import committed_results
+
+RESULTS_ENV = "SGB_RESULTS"
+DEFAULT_OUT_DIR = Path("sgb-results")
+MAINTAINER_FLAG = "--maintainer-write-committed"
+_WIDTH = 88
+
+
+def default_out_dir() -> Path:
+    """Where results go without ``--out-dir``: ``$SGB_RESULTS``, else ``./sgb-results``."""
+    return Path(os.environ.get(RESULTS_ENV) or DEFAULT_OUT_DIR)
+
+
+def _committed() -> Path | None:
+    try:
+        return committed_results().resolve()
+    except FileNotFoundError:
+        return None
+
+
+def resolve_out_dir(out_dir: Path | None, maintainer: bool) -> Path:
+    """The directory a run writes to; a ValueError for the committed results (or a directory
+    inside them) unless ``maintainer``, which writes there and nowhere else."""
+    committed = _committed()
+    if maintainer:
+        if committed is None:
+            raise ValueError(f"{MAINTAINER_FLAG}: no committed results next to the sgb package")
+        if out_dir is not None and out_dir.resolve() != committed:
+            raise ValueError(
+                f"{MAINTAINER_FLAG} writes into the committed results, {committed}; "
+                f"it takes no other --out-dir (got {out_dir})"
+            )
+        return committed
+    out_dir = default_out_dir() if out_dir is None else out_dir
+    target = out_dir.resolve()
+    if committed is not None and (target == committed or committed in target.parents):
+        raise ValueError(
+            f"{out_dir} is {'' if target == committed else 'inside '}the committed results "
+            f"({committed}), which reproduce writes only with {MAINTAINER_FLAG} "
+            f"(for maintainers refreshing them). Leave out --out-dir to write to "
+            f"${RESULTS_ENV} or ./{DEFAULT_OUT_DIR}, or name another directory."
+        )
+    return out_dir
+
+
+def _block(label: str, text: str, indent: int, hanging: int = 2) -> list[str]:
+    return textwrap.wrap(
+        f"{label}{text}",
+        _WIDTH,
+        initial_indent=" " * indent,
+        subsequent_indent=" " * (indent + hanging),
+    )
+
+
+def experiments_help() -> str:
+    """What ``reproduce --help`` says of every experiment and of where results go."""
+    lines = ["experiments (the cost of each profile; smoke is what the tests run):"]
+    for name, experiment in EXPERIMENTS.items():
+        lines += _block(f"{name}: ", experiment.figure, 2, 4)
+        lines += _block("inputs: ", experiment.inputs, 6)
+        for profile in PROFILE_NAMES:
+            lines += _block(f"{profile}: ", experiment.costs.get(profile, "not stated"), 6)
+    lines.append("")
+    lines.append("where results go:")
+    lines += _block(
+        "",
+        f"--out-dir, else ${RESULTS_ENV}, else ./{DEFAULT_OUT_DIR} (a file named after the "
+        "experiment, its dataset or environment and the profile; the RL experiments write "
+        "under rl/, their checkpoints under rl/checkpoints/). A rerun into the same "
+        "directory continues what an earlier run of the same config left there: finished "
+        "runs and cells are reused, a killed run resumes, and a results file whose results "
+        "come out the same is kept as it was, with its provenance. The committed results "
+        f"of the book are written only with {MAINTAINER_FLAG}.",
+        2,
+    )
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``python -m sgb``."""
+    parser = argparse.ArgumentParser(
+        prog="python -m sgb",
+        epilog="python -m sgb reproduce --help describes every experiment.",
+    )
+    commands = parser.add_subparsers(dest="command", required=True)
+    reproduce = commands.add_parser(
+        "reproduce",
+        help="run an experiment and write its results",
+        description="Run one experiment of the book at a profile and write its results "
+        "file, with provenance.",
+        epilog=experiments_help(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    reproduce.add_argument("experiment", choices=list(EXPERIMENTS))
+    reproduce.add_argument("--profile", choices=PROFILE_NAMES, default="smoke")
+    reproduce.add_argument(
+        "--out-dir",
+        type=Path,
+        default=None,
+        help=f"where results go (default: ${RESULTS_ENV}, else ./{DEFAULT_OUT_DIR}); "
+        f"never the committed results without {MAINTAINER_FLAG}",
+    )
+    reproduce.add_argument(
+        MAINTAINER_FLAG,
+        action="store_true",
+        help="write into the book's committed results/ (maintainers refreshing them)",
+    )
+    reproduce.add_argument("--dataset", help="dataset, for experiments that take one")
+    reproduce.add_argument("--env", help="environment, for experiments that take one")
+    return parser
+
+
+def _files(directory: Path) -> dict[Path, tuple[int, int]]:
+    """Every file under ``directory`` with its modification time and size."""
+    if not directory.is_dir():
+        return {}
+    return {
+        p.resolve(): (s.st_mtime_ns, s.st_size)
+        for p in directory.rglob("*")
+        if p.is_file() and not p.name.endswith((".lock", ".tmp"))
+        for s in [p.stat()]
+    }
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m sgb",
-        epilog="fig2 takes --dataset (digits, mnist1d offline; mnist, cifar10 downloaded); "
-        "fig3 takes --env (ant, halfcheetah); fig4, fig5 and spread take --env ant.",
-    )
-    commands = parser.add_subparsers(dest="command", required=True)
-    reproduce = commands.add_parser("reproduce", help="run an experiment and write its results")
-    reproduce.add_argument("experiment", choices=sorted(EXPERIMENTS))
-    reproduce.add_argument("--profile", choices=PROFILE_NAMES, default="smoke")
-    reproduce.add_argument("--out-dir", type=Path, default=Path("results"))
-    reproduce.add_argument("--dataset", help="dataset, for experiments that take one")
-    reproduce.add_argument("--env", help="environment, for experiments that take one")
-    args = parser.parse_args(argv)
+    args = build_parser().parse_args(argv)
     options = {k: v for k, v in (("dataset", args.dataset), ("env", args.env)) if v is not None}
     try:
+        out_dir = resolve_out_dir(args.out_dir, args.maintainer_write_committed)
         run = get_experiment(args.experiment).run
         _check_options(args.experiment, run, options)
-        path = run(args.profile, args.out_dir, **options)
+        before = _files(out_dir)
+        print(f"{args.experiment} ({args.profile}): results go to {out_dir}", flush=True)
+        if before:
+            print(
+                f"  {out_dir} holds {len(before)} file{'s' * (len(before) != 1)}; what an "
+                "earlier run of the same config left there is reused or continued, not redone",
+                flush=True,
+            )
+        path = run(args.profile, out_dir, **options)
     except (ValueError, TypeError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    except (OSError, TrainingDiverged) as error:
+    except (OSError, RuntimeError, TrainingDiverged) as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    print(f"wrote {path}")
+    after = _files(out_dir)
+    changed = sorted(p for p in after if before.get(p) != after[p])
+    if Path(path).resolve() in changed:
+        print(f"wrote {path}")
+    else:
+        print(
+            f"kept {path}: the results came out as the file already had them, so it keeps "
+            "its provenance (the run that made them)"
+        )
+    others = [p for p in changed if p != Path(path).resolve()]
+    if others:
+        print(f"also wrote {len(others)} other files under {out_dir} (checkpoints, states)")
     return 0
 
 

@@ -31,7 +31,8 @@ def type_sizes(n: int, k: int) -> np.ndarray:
 
 def assign_cell_types(n: int, k: int) -> np.ndarray:
     """Cell type of each of ``n`` neurons, shape (n,), values in [0, k), non-decreasing."""
-    return np.repeat(np.arange(k), type_sizes(n, k))
+    sizes = type_sizes(n, k)  # checks n and k first
+    return np.repeat(np.arange(len(sizes)), sizes)
 
 
 def expand_table(table: jnp.ndarray, shape: Sequence[int]) -> jnp.ndarray:
@@ -77,6 +78,13 @@ def _repeat_blocks(x: jnp.ndarray, axis: int, n: int) -> jnp.ndarray:
 def sum_blocks(x: jnp.ndarray, types: Sequence[int]) -> jnp.ndarray:
     """The transpose of ``expand_table``: (n_in, n_out, ...) -> ``types``, the sum of each
     type-table entry's block of ``x``."""
+    if not hasattr(x, "ndim"):
+        raise TypeError(f"x must be an array, got {x!r}")
+    types = validation.integers("types", types)
+    if len(types) != x.ndim:
+        raise ValueError(f"types {types} must have one entry per axis of x {tuple(x.shape)}")
+    for axis, (k, n) in enumerate(zip(types, x.shape, strict=True)):
+        _check_counts(n, k, f"x.shape[{axis}]", f"types[{axis}]")
     expand = functools.partial(expand_table, shape=x.shape)
     (table,) = jax.linear_transpose(expand, jax.ShapeDtypeStruct(tuple(types), x.dtype))(x)
     return table
@@ -84,6 +92,7 @@ def sum_blocks(x: jnp.ndarray, types: Sequence[int]) -> jnp.ndarray:
 
 def block_counts(shape: Sequence[int], types: Sequence[int]) -> np.ndarray:
     """Synapses per type-table entry, shape ``types``: how often each entry is expanded."""
+    shape, types = validation.integers("shape", shape), validation.integers("types", types)
     if len(shape) != len(types):
         raise ValueError(f"shape {tuple(shape)} and types {tuple(types)} must have equal length")
     counts = np.ones((), dtype=np.int64)
@@ -96,10 +105,15 @@ def block_counts(shape: Sequence[int], types: Sequence[int]) -> np.ndarray:
 def type_pair_block(kernel: jnp.ndarray, types: Sequence[int], pair: Sequence[int]) -> jnp.ndarray:
     """The synapses of one type-table entry: the sub-array of ``kernel`` whose neurons have
     the types in ``pair`` along each axis (``types`` = types per axis)."""
+    if not hasattr(kernel, "shape"):
+        raise TypeError(f"kernel must be an array, got {kernel!r}")
+    types = validation.integers("types", types)
+    pair = validation.integers("pair", pair, minimum=0)
     if not len(kernel.shape) == len(types) == len(pair):
         raise ValueError(f"kernel {kernel.shape}, types {types} and pair {pair} must match")
     index = []
     for n, k, t in zip(kernel.shape, types, pair, strict=True):
+        _check_counts(n, k, "kernel's axis", "types entry")
         if not 0 <= t < k:
             raise ValueError(f"pair entry {t} is not a type in [0, {k})")
         index.append(np.flatnonzero(assign_cell_types(n, k) == t))

@@ -1,5 +1,9 @@
 """Classifier modules: the deterministic p-net (uncompressed network and DGB) and the SGB
-classifier, each an optional deterministic conv trunk followed by a dense stack."""
+classifier, each an optional deterministic conv trunk followed by a dense stack.
+
+Each takes the shape of one example it is built for (``input_shape``), and refuses an
+input of another shape with a ``ValueError`` that names both; the package always gives
+it (``None`` leaves it unchecked)."""
 
 from collections.abc import Sequence
 from typing import Any
@@ -27,14 +31,28 @@ class ConvTrunk(nn.Module):
         return x.reshape(x.shape[0], -1)
 
 
+def check_input_shape(x: jnp.ndarray, input_shape: Sequence[int] | None) -> None:
+    """Raise ``ValueError`` unless ``x`` is a batch of examples of ``input_shape``."""
+    if input_shape is None:
+        return
+    shape = tuple(jnp.shape(x))
+    if len(shape) < 1 or shape[1:] != tuple(input_shape):
+        raise ValueError(
+            f"the network is built for a batch of inputs of shape {tuple(input_shape)}, "
+            f"got an array of shape {shape}"
+        )
+
+
 class DenseClassifier(nn.Module):
     """Conv trunk, then dense layers ``dense_0..`` of ``widths`` with ReLU between them."""
 
     widths: Sequence[int]
     conv_features: Sequence[int] = ()
+    input_shape: Sequence[int] | None = None
 
     @nn.compact
     def __call__(self, x: jnp.ndarray) -> jnp.ndarray:
+        check_input_shape(x, self.input_shape)
         x = ConvTrunk(tuple(self.conv_features), name="trunk")(x)
         for i, width in enumerate(self.widths):
             x = nn.Dense(width, name=f"dense_{i}")(x)
@@ -52,11 +70,13 @@ class SGBConvClassifier(nn.Module):
     prior: Prior = GaussianPrior(0.1)
     kl_counting: KLCounting = "synapse"
     rho_init: float = -5.0
+    input_shape: Sequence[int] | None = None
 
     @nn.compact
     def __call__(
         self, x: jnp.ndarray, mean_network: bool = False, local_reparam: bool = False
     ) -> jnp.ndarray:
+        check_input_shape(x, self.input_shape)
         x = ConvTrunk(tuple(self.conv_features), name="trunk")(x)
         head = SGBMLP(
             self.widths, self.cell_types, self.prior, self.kl_counting, self.rho_init, name="head"
@@ -71,11 +91,19 @@ def sgb_classifier(
     kl_counting: KLCounting,
     rho_init: float,
     conv_features: Sequence[int] = (),
+    input_shape: Sequence[int] | None = None,
 ) -> nn.Module:
-    """An ``SGBMLP`` of ``widths`` (with a conv trunk when ``conv_features`` is not empty)."""
+    """An ``SGBMLP`` of ``widths`` (with a conv trunk when ``conv_features`` is not empty)
+    for examples of ``input_shape`` (the MLP's: one axis, its input width)."""
+    shape = None if input_shape is None else tuple(int(n) for n in input_shape)
     if not conv_features:
-        return SGBMLP(widths, cell_types, prior, kl_counting, rho_init)
-    return SGBConvClassifier(tuple(conv_features), widths, cell_types, prior, kl_counting, rho_init)
+        if shape is not None and len(shape) != 1:
+            raise ValueError(f"an SGB MLP takes feature vectors, not inputs of shape {shape}")
+        width = None if shape is None else shape[0]
+        return SGBMLP(widths, cell_types, prior, kl_counting, rho_init, in_features=width)
+    return SGBConvClassifier(
+        tuple(conv_features), widths, cell_types, prior, kl_counting, rho_init, input_shape=shape
+    )
 
 
 def dense_sizes(

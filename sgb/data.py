@@ -7,7 +7,9 @@ checked by the MD5 of their decompressed bytes (Debian re-compressed them).
 Downloaded once and cached: ``mnist`` and ``cifar10``. Files are stored under
 ``$SGB_DATA_DIR`` (default ``~/.cache/sgb``) and checked against their MD5
 checksums every time they are used; a missing, partial or corrupt file is
-downloaded again, never used.
+downloaded again, never used. A Fashion-MNIST copy that does not decompress, or whose
+contents fail their check, is passed over for the next one. What cannot be read at all
+(a directory where a file should be) is a ``sgb.validation.CorruptFile`` naming it.
 """
 
 import gzip
@@ -17,11 +19,15 @@ import pickle
 import tarfile
 import urllib.error
 import urllib.request
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
+
+from sgb import validation
+from sgb.validation import REDOWNLOAD, CorruptFile
 
 
 class Dataset(NamedTuple):
@@ -34,6 +40,28 @@ class Dataset(NamedTuple):
     x_test: np.ndarray
     y_test: np.ndarray
     num_classes: int
+
+
+def check_dataset(data: Dataset) -> Dataset:
+    """``data`` if it can be trained and evaluated on: non-empty, finite ``x_train`` and
+    ``x_test`` of one shape per example, as many int labels in [0, num_classes) as
+    examples; else a ``ValueError`` (or ``TypeError``) naming the array."""
+    validation.instance("data", data, Dataset)
+    classes = validation.integer("num_classes", data.num_classes)
+    for split in ("train", "test"):
+        x = validation.finite_array(f"x_{split}", getattr(data, f"x_{split}"), min_ndim=2)
+        y = validation.labels(f"y_{split}", getattr(data, f"y_{split}"), classes)
+        if y.shape != (len(x),):
+            raise ValueError(
+                f"y_{split} must hold one label per example of x_{split} ({len(x)}), got "
+                f"shape {tuple(y.shape)}"
+            )
+    if data.x_train.shape[1:] != data.x_test.shape[1:]:
+        raise ValueError(
+            f"x_train and x_test must have examples of one shape, got "
+            f"{data.x_train.shape[1:]} and {data.x_test.shape[1:]}"
+        )
+    return data
 
 
 class RemoteFile(NamedTuple):
@@ -131,6 +159,8 @@ def fetch(remote: RemoteFile, directory: Path | None = None) -> Path:
     directory = data_dir() if directory is None else Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     path = directory / remote.name
+    if path.is_dir():
+        raise CorruptFile(path, "is a directory, where a downloaded file belongs", REDOWNLOAD)
     if path.exists() and md5sum(path) == remote.md5:
         return path
     errors = []
@@ -163,25 +193,41 @@ def parse_idx(raw: bytes) -> np.ndarray:
     return data.reshape(shape)
 
 
+def _gunzip(path: Path) -> bytes:
+    """The decompressed bytes of the gzip file ``path``; a ``CorruptFile`` naming it if it is
+    not one, is cut short or cannot be read."""
+    try:
+        with gzip.open(path, "rb") as f:
+            return f.read()
+    except (OSError, EOFError, zlib.error) as error:
+        raise CorruptFile(path, f"does not decompress ({error!r})", REDOWNLOAD) from error
+
+
 def _read_idx_gz(path: Path) -> np.ndarray:
-    with gzip.open(path, "rb") as f:
-        return parse_idx(f.read())
+    raw = _gunzip(path)
+    try:
+        return parse_idx(raw)
+    except ValueError as error:
+        raise CorruptFile(path, f"is not an IDX file: {error}", REDOWNLOAD) from error
 
 
 def _verified_idx(remote: RemoteFile, raw_md5: str, directories: list[Path]) -> np.ndarray:
     """The IDX array of the first copy of ``remote`` in ``directories`` whose decompressed
-    bytes have MD5 ``raw_md5``; failing all, a download into the cache (``fetch``)."""
+    bytes have MD5 ``raw_md5`` (a copy that does not decompress is passed over); failing
+    all, a download into the cache (``fetch``, which replaces a corrupt cached copy)."""
     for directory in directories:
         path = directory / remote.name
-        if path.exists():
-            with gzip.open(path, "rb") as f:
-                raw = f.read()
+        if path.is_file():
+            try:
+                raw = _gunzip(path)
+            except CorruptFile:
+                continue
             if hashlib.md5(raw).hexdigest() == raw_md5:
                 return parse_idx(raw)
-    with gzip.open(fetch(remote, directories[-1]), "rb") as f:
-        raw = f.read()
+    path = fetch(remote, directories[-1])
+    raw = _gunzip(path)
     if hashlib.md5(raw).hexdigest() != raw_md5:
-        raise RuntimeError(f"{remote.name}: decompressed contents fail their MD5 check")
+        raise CorruptFile(path, "decompresses to contents that fail their MD5 check", REDOWNLOAD)
     return parse_idx(raw)
 
 
@@ -199,9 +245,16 @@ def parse_cifar10_tar(path: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
             ys.append(np.asarray(batch[b"labels"], np.int32))
         return np.concatenate(xs).transpose(0, 2, 3, 1), np.concatenate(ys)
 
-    with tarfile.open(path, "r:gz") as tar:
-        x_tr, y_tr = batches(tar, [f"data_batch_{i}" for i in range(1, 6)])
-        x_te, y_te = batches(tar, ["test_batch"])
+    try:
+        with tarfile.open(path, "r:gz") as tar:
+            x_tr, y_tr = batches(tar, [f"data_batch_{i}" for i in range(1, 6)])
+            x_te, y_te = batches(tar, ["test_batch"])
+    except (OSError, EOFError, zlib.error, tarfile.TarError, pickle.UnpicklingError) as error:
+        raise CorruptFile(
+            path, f"is not CIFAR-10's python tarball ({error!r})", REDOWNLOAD
+        ) from error
+    except (ValueError, KeyError, TypeError) as error:
+        raise CorruptFile(path, f"holds a malformed batch ({error!r})", REDOWNLOAD) from error
     return x_tr, y_tr, x_te, y_te
 
 
@@ -224,7 +277,7 @@ def mnist(seed: int = 0, directory: Path | None = None) -> Dataset:
 
     ``seed`` is unused (the split is fixed); it keeps the loaders' signatures alike.
     """
-    del seed
+    validation.seed("seed", seed)
     arrays = {split: _read_idx_gz(fetch(f, directory)) for split, f in MNIST_FILES.items()}
     return _idx_dataset("mnist", arrays)
 
@@ -245,7 +298,7 @@ def fashion_mnist(seed: int = 0, directory: Path | None = None) -> Dataset:
 
     ``seed`` is unused (the split is fixed); it keeps the loaders' signatures alike.
     """
-    del seed
+    validation.seed("seed", seed)
     directories = [FASHION_MNIST_SYSTEM_DIR, data_dir() if directory is None else Path(directory)]
     arrays = {
         split: _verified_idx(remote, raw_md5, directories)
@@ -259,7 +312,7 @@ def cifar10(seed: int = 0, directory: Path | None = None) -> Dataset:
 
     ``seed`` is unused (the split is fixed); it keeps the loaders' signatures alike.
     """
-    del seed
+    validation.seed("seed", seed)
     x_tr, y_tr, x_te, y_te = parse_cifar10_tar(fetch(CIFAR10_FILE, directory))
     x_tr, x_te = _standardise(x_tr.astype(np.float32), x_te.astype(np.float32), axis=(0, 1, 2))
     return Dataset("cifar10", x_tr, y_tr, x_te, y_te, 10)
@@ -270,7 +323,8 @@ def digits(seed: int = 0, test_fraction: float = 0.25) -> Dataset:
     from sklearn.datasets import load_digits
     from sklearn.model_selection import train_test_split
 
-    if not 0.0 < test_fraction < 1.0:
+    validation.seed("seed", seed)
+    if not 0.0 < validation.real("test_fraction", test_fraction) < 1.0:
         raise ValueError(f"test_fraction must lie in (0, 1), got {test_fraction}")
     x, y = load_digits(return_X_y=True)
     x_tr, x_te, y_tr, y_te = train_test_split(
@@ -280,9 +334,22 @@ def digits(seed: int = 0, test_fraction: float = 0.25) -> Dataset:
     return Dataset("digits", x_tr, y_tr.astype(np.int32), x_te, y_te.astype(np.int32), 10)
 
 
+MNIST1D_MIN_SAMPLES = 10  # it makes num_samples // 10 signals of each of 10 templates
+
+
 def mnist1d(seed: int = 0, num_samples: int = 5000) -> Dataset:
-    """MNIST-1D (Greydanus, 2020): 40-sample 1-D signals of 10 digit templates, made in code."""
+    """MNIST-1D (Greydanus, 2020): 40-sample 1-D signals of 10 digit templates, made in code.
+
+    ``num_samples`` (at least ``MNIST1D_MIN_SAMPLES``) are split 80/20 into train and test.
+    """
     from mnist1d.data import get_dataset_args, make_dataset
+
+    validation.seed("seed", seed)
+    if validation.integer("num_samples", num_samples) < MNIST1D_MIN_SAMPLES:
+        raise ValueError(
+            f"num_samples must be >= {MNIST1D_MIN_SAMPLES} (one signal of each of the 10 "
+            f"templates), got {num_samples}"
+        )
 
     args = get_dataset_args()
     args.num_samples = num_samples
@@ -311,6 +378,6 @@ DATASETS: dict[str, Callable[..., Dataset]] = {
 def load(name: str, seed: int = 0) -> Dataset:
     """Load a dataset by name: digits, mnist1d (offline), fashion-mnist (Debian package or
     downloaded once), mnist, cifar10 (downloaded once)."""
-    if name not in DATASETS:
-        raise ValueError(f"unknown dataset {name!r}; available: {sorted(DATASETS)}")
-    return DATASETS[name](seed=seed)
+    if not isinstance(name, str) or name not in DATASETS:
+        raise ValueError(f"unknown dataset name {name!r}; available: {sorted(DATASETS)}")
+    return DATASETS[name](seed=validation.seed("seed", seed))

@@ -34,7 +34,8 @@ from flax.training.train_state import TrainState
 from sgb import validation
 from sgb.classifiers import DenseClassifier, dense_sizes, with_kernels
 from sgb.compression import code_dims, dgb_gnet_hidden
-from sgb.data import Dataset
+from sgb.data import Dataset, check_dataset
+from sgb.divergence import FIT_BOUND, Guard, learning_rate_cause
 from sgb.training import accuracy, adam_state, cross_entropy_step, train_loop
 
 GNetParams = list[tuple[jnp.ndarray, jnp.ndarray]]
@@ -183,7 +184,9 @@ class DGB:
         self.config = config
         self.sizes = dense_sizes(input_shape, config.conv_features, config.hidden, num_classes)
         self.codes = [jnp.asarray(c) for c in layer_codes(self.sizes)]
-        self.model = DenseClassifier((*config.hidden, num_classes), config.conv_features)
+        self.model = DenseClassifier(
+            (*config.hidden, num_classes), config.conv_features, tuple(input_shape)
+        )
         self.gnet_tx = optax.adam(config.gnet_learning_rate)
         self.pnet_step = jax.jit(pnet_step, donate_argnums=0)
         self.write_back_step = jax.jit(self.write_back, donate_argnums=0)
@@ -291,12 +294,26 @@ def train_dgb(
     ``state.best_gnets``), chosen on ``config.validation_size`` training images.
     Given a ``state`` (a DGB of this config trained for ``state.rounds`` rounds), training
     continues from it, and the state passed in is consumed (its buffers are reused).
+    Training stops (``sgb.divergence.TrainingDiverged``) when the p-net's loss blows up or
+    a write-back's fit error exceeds ``sgb.divergence.FIT_BOUND``.
     """
+    validation.instance("config", config, DGBConfig)
+    check_dataset(data)
     dgb = dgb_for(config, data.x_train.shape[1:], data.num_classes)
     n_val = min(config.validation_size, len(data.x_train))
     pick = np.random.default_rng(config.seed + 1).choice(len(data.x_train), n_val, replace=False)
     x_val, y_val = jnp.asarray(data.x_train[pick]), jnp.asarray(data.y_train[pick])
     state = dgb.init(data.x_train) if state is None else state
+    guard = Guard("p-net loss", cause=lambda: learning_rate_cause("learning_rate"))
+    fit_guard = Guard(cause=lambda: learning_rate_cause("gnet_learning_rate"))
+
+    def write_back(state: DGBState) -> DGBState:
+        state = dgb.write_back_step(state, x_val, y_val)
+        rounds = int(state.rounds)
+        what = f"the g-nets' fit error after round {rounds}"
+        fit_guard.bound(what, state.fit_mse, rounds * config.pnet_steps, FIT_BOUND)
+        return state
+
     # the state is donated: its buffers (the best network among them) are reused, not copied
     state, history = train_loop(
         state,
@@ -306,10 +323,12 @@ def train_dgb(
         batch_size=config.batch_size,
         num_steps=config.rounds * config.pnet_steps,
         seed=config.seed + int(state.rounds),
-        hook=lambda state: dgb.write_back_step(state, x_val, y_val),
+        hook=write_back,
         hook_every=config.pnet_steps,
         params_of=lambda state: state.pnet.params,
         progress=progress,
         desc="DGB training",
+        num_classes=data.num_classes,
+        guard=guard,
     )
     return dgb, state, history

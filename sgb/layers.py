@@ -26,6 +26,7 @@ from typing import Literal
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from sgb import validation
 from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blocks, type_sizes
@@ -34,6 +35,30 @@ from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
 
 KLCounting = Literal["synapse", "table"]
 KL_COUNTINGS = ("synapse", "table")
+SOFTPLUS_LIMIT = 88.0  # the largest x whose exp(x) float32 holds with room to spare
+
+
+@jax.custom_jvp
+def softplus(x: jnp.ndarray) -> jnp.ndarray:
+    """log(1 + e^x): the one softplus of the package's spreads, sigma = softplus(rho) of
+    every genome, wherever it is computed (the layers, their KL, the RL networks).
+
+    Computed as log1p(exp(min(x, SOFTPLUS_LIMIT))): bit for bit the log1p(exp(x)) the
+    layers used before, wherever float32's exp(x) is finite (x <= 88); equal to
+    ``jax.nn.softplus`` to float32 rounding (bit for bit for x <= 0, where every trained
+    rho lies). Above 88, where log1p(exp(x)) overflowed to inf, it saturates at 88, a
+    spread no genome reaches; its gradient stays sigmoid(x) everywhere, so a rho up there
+    is still pulled back. Ending in log1p matters for speed: XLA computes it once per
+    type-pair table, where ``jax.nn.softplus``, which ends in a max and an add, is fused
+    into the per-synapse loop of ``individual_kernel`` (see there).
+    """
+    return jnp.log1p(jnp.exp(jnp.minimum(x, SOFTPLUS_LIMIT)))
+
+
+@softplus.defjvp
+def _softplus_jvp(primals, tangents):
+    (x,), (t,) = primals, tangents
+    return softplus(x), t * jax.nn.sigmoid(x)
 
 
 def _check_types(name: str, types: int, neurons: int) -> None:
@@ -76,12 +101,24 @@ def genome_kl(
     ``counting="synapse"`` weights each pair by its number of synapses (the KL of the
     full weight matrix, as Bayes by backprop counts it); ``"table"`` counts each pair once.
     The cost is that of the tables, not of the kernel: the one KL of the layers and of
-    the RL actor-critic alike.
+    the RL actor-critic alike. Its arguments are checked at the Python level (shapes
+    always; values, sigma > 0 and finite, only outside ``jit``), at no cost per step.
     """
+    validation.instance("prior", prior, PRIOR_TYPES)
     validation.choice("counting", counting, KL_COUNTINGS)
+    mu = validation.array("mu", mu, min_ndim=1)
+    sigma = validation.array("sigma", sigma)
+    if tuple(sigma.shape) != tuple(mu.shape):
+        raise ValueError(f"sigma must have mu's shape {tuple(mu.shape)}, got {tuple(sigma.shape)}")
+    shape = validation.integers("shape", shape)
+    if len(shape) != len(mu.shape):
+        raise ValueError(f"shape {shape} must have one entry per axis of mu {tuple(mu.shape)}")
+    if not validation.is_traced(sigma) and not bool(np.all(np.asarray(sigma) > 0)):
+        raise ValueError("sigma must be > 0 (and not nan)")
     if isinstance(prior, GaussianPrior):
         per_pair = prior.kl(mu, sigma)
     else:
+        validation.prng_key("key", key)
         per_pair = prior.kl(mu, sigma, mu + sigma * standard_normal(key, mu.shape))
     counts = jnp.asarray(block_counts(shape, mu.shape), dtype=mu.dtype)
     return _count_pairs(per_pair, counts, counting)
@@ -115,7 +152,6 @@ def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarra
     return jnp.repeat(y, type_sizes(features, k_out), axis=-1, total_repeat_length=features)
 
 
-@jax.custom_vjp
 def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
     """Individuals' full kernels from type tables ``mu``, ``rho`` (k_in, k_out, ...) and
     their ``noise`` (..., n_in, n_out, ...): mu + softplus(rho) * noise, each synapse from
@@ -123,20 +159,42 @@ def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> 
 
     Three things keep its cost near that of the noise alone (``benchmarks/bench_layers.py``):
 
-    - softplus is written log1p(exp(rho)) (exact in float32 up to rho = 88), which XLA
-      computes once per type pair; ``jax.nn.softplus`` also reads rho through a max that
-      XLA fused into the per-synapse loop (7x slower for 784 x 800 of 30 x 100 types);
+    - ``softplus`` ends in log1p(exp(.)), which XLA computes once per type pair;
+      ``jax.nn.softplus`` also reads rho through a max that XLA fused into the
+      per-synapse loop (7x slower for 784 x 800 of 30 x 100 types);
     - the gradient takes the noise back from the kernel, (kernel - mu) / sigma, instead
       of from ``noise``, which XLA would compute a second time inside the backward pass;
     - the gradient sums over individuals by pairwise halving (``_sum_leading``).
+
+    The shapes are checked when it is traced (``ValueError``/``TypeError`` naming the
+    argument), at no cost per call of a compiled step.
     """
+    mu = validation.array("mu", mu, min_ndim=1)
+    rho = validation.array("rho", rho)
+    noise = validation.array("noise", noise, min_ndim=len(mu.shape))
+    if tuple(rho.shape) != tuple(mu.shape):
+        raise ValueError(f"rho must have mu's shape {tuple(mu.shape)}, got {tuple(rho.shape)}")
+    for name, value in (("mu", mu), ("rho", rho), ("noise", noise)):
+        if not jnp.issubdtype(value.dtype, jnp.floating):
+            raise TypeError(f"{name} must be a float array, got dtype {value.dtype}")
+    for axis, (k, n) in enumerate(zip(mu.shape, noise.shape[noise.ndim - mu.ndim :], strict=True)):
+        if not 0 < k <= n:
+            raise ValueError(
+                f"noise has {n} neurons along axis {axis} of the kernel, fewer than mu's {k} "
+                "cell types (or none)"
+            )
+    return _individual_kernel(mu, rho, noise)
+
+
+@jax.custom_vjp
+def _individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
     shape = noise.shape[noise.ndim - mu.ndim :]
     return expand_table(mu, shape) + expand_table(_sigma(rho), shape) * noise
 
 
 def _sigma(rho: jnp.ndarray) -> jnp.ndarray:
-    """softplus(rho) as log1p(exp(rho)), so XLA keeps it on the type table (see above)."""
-    return jnp.log1p(jnp.exp(rho))
+    """softplus(rho), kept on the type table by XLA (see ``softplus``)."""
+    return softplus(rho)
 
 
 def _sum_leading(x: jnp.ndarray, n: int) -> jnp.ndarray:
@@ -153,7 +211,7 @@ def _sum_leading(x: jnp.ndarray, n: int) -> jnp.ndarray:
 
 
 def _individual_kernel_forward(mu, rho, noise):
-    kernel = individual_kernel(mu, rho, noise)
+    kernel = _individual_kernel(mu, rho, noise)
     return kernel, (mu, rho, kernel)
 
 
@@ -172,7 +230,7 @@ def _individual_kernel_backward(residuals, grad):
     )
 
 
-individual_kernel.defvjp(_individual_kernel_forward, _individual_kernel_backward)
+_individual_kernel.defvjp(_individual_kernel_forward, _individual_kernel_backward)
 
 
 @jax.custom_vjp
@@ -242,7 +300,7 @@ class _GenomeKernel(nn.Module):
         the type tables (mu, sigma) instead. Sows the KL (``genome_kl``) when sampling."""
         mu = self.param("mu", nn.initializers.normal(self.mean_init_std), self.types)
         rho = self.param("rho", nn.initializers.constant(self.rho_init), self.types)
-        sigma = jax.nn.softplus(rho)
+        sigma = softplus(rho)
         if tables_only:
             if not mean_network:
                 self._sow_kl(mu, sigma)
@@ -375,7 +433,8 @@ class SGBMLP(nn.Module):
     ``widths``: output width of each layer, e.g. (800, 10).
     ``cell_types``: types of each neuron layer including the input, length
     len(widths) + 1, e.g. (30, 64, 10); ``None`` entries mean one type per neuron.
-    ``in_features``: the input width, checked on every call when given.
+    ``in_features``: the input width, checked on every call when given (every model the
+    package builds gives it); each further layer checks the width of the one before.
     """
 
     widths: Sequence[int]
@@ -414,6 +473,7 @@ class SGBMLP(nn.Module):
                 prior=self.prior,
                 kl_counting=self.kl_counting,
                 rho_init=self.rho_init,
+                in_features=self.in_features if i == 0 else self.widths[i - 1],
             )(x, mean_network, local_reparam)
             if i < len(self.widths) - 1:
                 x = nn.relu(x)
@@ -427,7 +487,7 @@ def genome_tables(params: dict) -> dict[str, tuple[jnp.ndarray, jnp.ndarray]]:
     def visit(tree: dict, path: tuple[str, ...]) -> None:
         for name, sub in tree.items():
             if name == "genome":
-                tables["/".join(path)] = (sub["mu"], jax.nn.softplus(sub["rho"]))
+                tables["/".join(path)] = (sub["mu"], softplus(sub["rho"]))
             elif isinstance(sub, dict):
                 visit(sub, (*path, name))
 

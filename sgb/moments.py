@@ -36,6 +36,7 @@ import jax.numpy as jnp
 from jax.scipy.stats import norm
 
 from sgb.celltypes import block_counts, expand_table
+from sgb.layers import softplus
 
 
 class GaussianLayer(NamedTuple):
@@ -124,7 +125,7 @@ def mlp_layers(params: Any) -> list[GaussianLayer]:
     layers = []
     for name in _layer_names(inner):
         genome = inner[name]["genome"]
-        sigma = jnp.log1p(jnp.exp(genome["rho"]))  # as sgb.layers.individual_kernel draws it
+        sigma = softplus(genome["rho"])  # as sgb.layers.individual_kernel draws it
         layers.append(GaussianLayer(genome["mu"], sigma, inner[name]["bias"]))
     return layers
 

@@ -19,10 +19,14 @@ tails (largest relative error about 3e-7 against scipy's ``ndtri``, 6e-6 for
 the noise is not meant for cryptography.
 """
 
+from collections.abc import Sequence
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import lax
+
+from sgb import validation
 
 _MAX_SIZE = 2**32
 
@@ -37,7 +41,12 @@ def _mix(x: jnp.ndarray) -> jnp.ndarray:
 
 
 def standard_normal(key: jax.Array, shape: tuple[int, ...]) -> jnp.ndarray:
-    """float32 N(0, 1) noise of ``shape``, a deterministic function of ``key``."""
+    """float32 N(0, 1) noise of ``shape``, a deterministic function of ``key`` (a jax PRNG
+    key; ``shape`` a sequence of integers >= 0)."""
+    validation.prng_key("key", key)
+    if isinstance(shape, str | bytes) or not isinstance(shape, Sequence):
+        raise TypeError(f"shape must be a sequence of integers, got {shape!r}")
+    shape = tuple(validation.integer(f"shape[{i}]", n, minimum=0) for i, n in enumerate(shape))
     size = int(np.prod(shape, dtype=np.int64))
     if size >= _MAX_SIZE:
         raise ValueError(f"shape {shape} has {size} elements; at most 2**32 - 1 are supported")
@@ -60,12 +69,20 @@ _TAIL = (
 def normal_from_bits(bits: jnp.ndarray) -> jnp.ndarray:
     """uint32 words -> float32 N(0, 1) by the normal quantile of their top 23 bits; finite
     for every word."""
+    bits = validation.array("bits", bits)
+    if bits.dtype != jnp.uint32:
+        raise TypeError(f"bits must be uint32 words, got dtype {bits.dtype}")
     uniform = ((bits >> 9).astype(jnp.float32) + 0.5) * 2.0**-23
     return normal_quantile(uniform)
 
 
 def normal_quantile(u: jnp.ndarray) -> jnp.ndarray:
     """The standard normal quantile of float32 ``u`` in (0, 1): sqrt(2) erfinv(2u - 1)."""
+    u = validation.array("u", u)
+    if not jnp.issubdtype(u.dtype, jnp.floating):
+        raise TypeError(f"u must be a float array, got dtype {u.dtype}")
+    if not validation.is_traced(u) and np.size(u) and not bool(np.all((u > 0) & (u < 1))):
+        raise ValueError("u must lie in (0, 1)")
     w = -jnp.log(4.0 * u * (1.0 - u))  # = -log(1 - x^2) for x = 2u - 1
     central = _horner(_CENTRAL, w - 2.5)
     tail = _horner(_TAIL, jnp.sqrt(w) - 3.0)

@@ -121,17 +121,48 @@ def provenance(config: Any, profile: str, seeds: list[int], wall_time_s: float) 
     }
 
 
+# What makes two results files the same: their results and these fields of their provenance
+# (the others say when, where and how fast a run made them).
+SAME_RUN_FIELDS = ("config", "profile", "seeds")
+
+
 def write_results(path: str | Path, results: dict[str, Any], record: dict[str, Any]) -> Path:
     """Write ``{"provenance": record, "results": results}`` as strict JSON (non-finite
-    numbers as ``null``), atomically; returns the path."""
+    numbers as ``null``), atomically; returns the path.
+
+    A file that already holds these results, of the same config, profile and seeds, is
+    left as it is: a rerun that reused finished runs, or came out the same, does not
+    replace the provenance of the run that made them (its commit, date and wall time)."""
     payload = {"provenance": _jsonable(record), "results": _jsonable(results)}
     text = json.dumps(payload, indent=1, sort_keys=False, allow_nan=False) + "\n"
+    if _holds_the_same(path, json.loads(text)):
+        return Path(path)
     return atomic_write(path, text.encode())
 
 
+def _holds_the_same(path: str | Path, payload: dict[str, Any]) -> bool:
+    try:
+        old = read_results(path)
+    except (OSError, ValueError):
+        return False
+    if not isinstance(old, dict) or old.get("results") != payload["results"]:
+        return False
+    before, now = old.get("provenance") or {}, payload["provenance"]
+    return all(before.get(key) == now.get(key) for key in SAME_RUN_FIELDS)
+
+
 def read_results(path: str | Path) -> dict[str, Any]:
-    """Read a results file written by ``write_results``."""
-    return json.loads(Path(path).read_text())
+    """Read a results file written by ``write_results``; a file that is not JSON raises
+    ``sgb.validation.CorruptFile`` naming it."""
+    from sgb.validation import RESTART, CorruptFile
+
+    try:
+        payload = json.loads(Path(path).read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise CorruptFile(
+            path, f"is not a results file ({error})", RESTART, "results file"
+        ) from error
+    return payload
 
 
 def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:

@@ -6,10 +6,17 @@ the identity of the run (``run``: its configuration and seed, JSON) and how far 
 rebuilds the state on the tree structure of ``template`` (a freshly initialised state of
 the same run) and refuses a file written by another run, naming the file. Typed PRNG
 keys are stored as their key data.
+
+A file that cannot be what ``save`` wrote (a flipped byte, which the zip format's CRC-32
+catches; a truncated or empty file; a directory in its place; a missing entry) is a
+``sgb.validation.CorruptFile`` that names it and says to delete it and start afresh.
 """
 
 import io
 import json
+import zipfile
+import zlib
+from collections.abc import Callable, Collection
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +25,20 @@ import jax.numpy as jnp
 import numpy as np
 
 from sgb.provenance import atomic_write
+from sgb.validation import RESTART, CorruptFile, finite_tree
+
+_WHAT = "training state"
+# what reading a damaged .npz can raise, from the zip layer up to the JSON of its meta
+_READ_ERRORS = (
+    OSError,
+    EOFError,
+    ValueError,
+    KeyError,
+    TypeError,
+    SyntaxError,
+    zipfile.BadZipFile,
+    zlib.error,
+)
 
 
 def save(path: str | Path, state: Any, run: dict, progress: dict) -> Path:
@@ -30,22 +51,50 @@ def save(path: str | Path, state: Any, run: dict, progress: dict) -> Path:
     return atomic_write(path, buffer.getvalue())
 
 
-def load(path: str | Path, template: Any, run: dict) -> tuple[Any, dict]:
-    """The state and progress saved at ``path``, on ``template``'s tree structure."""
+def load(
+    path: str | Path,
+    template: Any,
+    run: dict,
+    progress_keys: Collection[str] = (),
+    finite: Callable[[Any], Any] | None = None,
+) -> tuple[Any, dict]:
+    """The state and progress saved at ``path``, on ``template``'s tree structure.
+
+    ``progress_keys``: entries the progress must hold. ``finite``: the part of the state
+    (a function of it, e.g. its parameters) that must hold no nan or inf. A file that
+    fails any check, or cannot be read, is a ``CorruptFile``; a file of another run a
+    ``ValueError``.
+    """
+    path = Path(path)
     try:
-        with np.load(path) as data:
+        with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
-            arrays = [data[f"leaf_{i}"] for i in range(len(data.files) - 1)]
-    except (OSError, ValueError, KeyError) as error:
-        raise ValueError(f"training state {path} is unreadable: {error!r}") from error
+            count = len(data.files) - 1
+            arrays = [np.asarray(data[f"leaf_{i}"]) for i in range(count)]
+    except _READ_ERRORS as error:
+        raise CorruptFile(path, f"is unreadable ({error!r})", RESTART, _WHAT) from error
+    if not isinstance(meta, dict) or not {"run", "progress"} <= set(meta):
+        raise CorruptFile(path, "has no run or progress in its meta", RESTART, _WHAT)
     if meta["run"] != run:
         raise ValueError(f"training state {path} belongs to another run: {meta['run']}")
+    progress = meta["progress"]
+    missing = [
+        key for key in progress_keys if not isinstance(progress, dict) or key not in progress
+    ]
+    if missing:
+        raise CorruptFile(path, f"has no {missing} in its progress", RESTART, _WHAT)
     leaves, treedef = jax.tree_util.tree_flatten(template)
     shapes = [(np.shape(a), jnp.asarray(a).dtype) for a in map(_raw, leaves)]
     if shapes != [(a.shape, a.dtype) for a in arrays]:
-        raise ValueError(f"training state {path} does not have the arrays of this run's state")
+        raise CorruptFile(path, "does not hold the arrays of this run's state", RESTART, _WHAT)
     restored = [_like(leaf, jnp.asarray(a)) for leaf, a in zip(leaves, arrays, strict=True)]
-    return jax.tree_util.tree_unflatten(treedef, restored), meta["progress"]
+    state = jax.tree_util.tree_unflatten(treedef, restored)
+    if finite is not None:
+        try:
+            finite_tree("state", finite(state))
+        except ValueError as error:
+            raise CorruptFile(path, f"holds {error}", RESTART, _WHAT) from error
+    return state, progress
 
 
 def _is_key(leaf: Any) -> bool:

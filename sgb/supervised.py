@@ -6,7 +6,10 @@
   of the network its g-nets generate.
 * Uncompressed (``DenseConfig``): the p-net trained on cross-entropy alone.
 
-``train_and_evaluate(config, data)`` is the one call for any of them.
+``train_and_evaluate(config, data)`` is the one call for any of them. Its result flags a
+network whose test accuracy is no better than chance (``at_chance``) rather than report
+it silently; the data are checked before training (``sgb.data.check_dataset``) and every
+evaluation's inputs before it runs.
 """
 
 import dataclasses
@@ -20,7 +23,7 @@ import numpy as np
 
 from sgb import validation
 from sgb.classifiers import DenseClassifier, sgb_classifier
-from sgb.data import Dataset
+from sgb.data import Dataset, check_dataset
 from sgb.dgb import DGBConfig, train_dgb
 from sgb.elbo import cross_entropy
 from sgb.layers import KL_COUNTINGS, KLCounting
@@ -99,15 +102,20 @@ class DenseConfig:
         _check_training(self)
 
 
-def make_model(config: ClassifierConfig, num_classes: int) -> nn.Module:
-    """The SGB classifier a config describes (an ``SGBMLP`` without conv layers)."""
+def make_model(
+    config: ClassifierConfig, num_classes: int, input_shape: tuple[int, ...] | None = None
+) -> nn.Module:
+    """The SGB classifier a config describes (an ``SGBMLP`` without conv layers), for
+    examples of ``input_shape`` (checked on every call when given)."""
+    validation.instance("config", config, ClassifierConfig)
     return sgb_classifier(
-        (*config.hidden, num_classes),
+        (*config.hidden, validation.integer("num_classes", num_classes)),
         config.cell_types,
         config.prior,
         config.kl_counting,
         config.rho_init,
         config.conv_features,
+        input_shape,
     )
 
 
@@ -116,7 +124,8 @@ def train_classifier(
 ) -> tuple[nn.Module, Any, list[dict[str, float]]]:
     """Train an SGB classifier with Adam on the negative ELBO; returns (model, params,
     per-epoch history of loss, data term and KL)."""
-    model = make_model(config, data.num_classes)
+    check_dataset(data)
+    model = make_model(config, data.num_classes, data.x_train.shape[1:])
     params = init_params(model, jax.random.key(config.seed), data.x_train[:1])
     params, history = fit_elbo(
         model,
@@ -132,6 +141,7 @@ def train_classifier(
         seed=config.seed,
         local_reparam=config.local_reparam,
         progress=progress,
+        num_classes=data.num_classes,
     )
     return model, params, history
 
@@ -140,7 +150,11 @@ def train_dense(
     config: DenseConfig, data: Dataset, progress: bool = True
 ) -> tuple[nn.Module, Any, list[dict[str, float]]]:
     """Train the uncompressed network on cross-entropy; returns (model, params, history)."""
-    model = DenseClassifier((*config.hidden, data.num_classes), config.conv_features)
+    validation.instance("config", config, DenseConfig)
+    check_dataset(data)
+    model = DenseClassifier(
+        (*config.hidden, data.num_classes), config.conv_features, data.x_train.shape[1:]
+    )
     params = model.init(jax.random.key(config.seed), data.x_train[:1])
     state = adam_state(model.apply, params, config.learning_rate)
     state, history = train_loop(
@@ -153,8 +167,36 @@ def train_dense(
         seed=config.seed,
         progress=progress,
         desc="uncompressed training",
+        num_classes=data.num_classes,
     )
     return model, state.params, history
+
+
+def _check_eval(x: Any, y: Any) -> tuple[Any, Any]:
+    """Test inputs ``x`` (non-empty, finite) and as many integer labels ``y`` (>= 0)."""
+    x = validation.finite_array("x", x, min_ndim=2)
+    y = validation.labels("y", y)
+    if tuple(y.shape) != (len(x),):
+        raise ValueError(f"y must hold one label per example of x ({len(x)}), got shape {y.shape}")
+    return x, y
+
+
+def _check_classes(logits: jnp.ndarray, y: Any) -> None:
+    """Labels ``y`` must name one of the network's ``logits.shape[-1]`` classes."""
+    validation.labels("y", y, logits.shape[-1])
+
+
+def chance_level(y: np.ndarray) -> float:
+    """The accuracy of always guessing the most common of the labels ``y``."""
+    y = np.asarray(y)
+    return float(np.bincount(y).max() / y.size)
+
+
+def at_chance(accuracy: float, y: np.ndarray) -> bool:
+    """Whether ``accuracy`` on labels ``y`` is no better than chance (``chance_level``): not
+    above it by three binomial standard errors of a guess on ``len(y)`` examples."""
+    p = chance_level(y)
+    return bool(accuracy <= p + 3.0 * np.sqrt(p * (1.0 - p) / np.size(y)))
 
 
 def innate_accuracy(
@@ -162,9 +204,11 @@ def innate_accuracy(
 ) -> dict[str, Any]:
     """Test accuracy of the mean network, of each of ``n_individuals`` sampled individuals,
     and of the population's averaged prediction (mean of their softmax outputs)."""
-    if n_individuals < 1:
-        raise ValueError(f"n_individuals must be >= 1, got {n_individuals}")
+    validation.integer("n_individuals", n_individuals)
+    validation.prng_key("key", key)
+    x, y = _check_eval(x, y)
     logits = apply_population(model, params, x, jax.random.split(key, n_individuals))
+    _check_classes(logits, y)
     individuals = (jnp.argmax(logits, -1) == y).mean(axis=1)
     averaged = jax.nn.softmax(logits, -1).mean(axis=0)
     return {
@@ -176,7 +220,9 @@ def innate_accuracy(
 
 def dense_accuracy(model: nn.Module, params: Any, x: np.ndarray, y: np.ndarray) -> float:
     """Test accuracy of a deterministic ``DenseClassifier`` (DGB or uncompressed)."""
+    x, y = _check_eval(x, y)
     logits = _dense_logits(model, {"params": params["params"]}, x)
+    _check_classes(logits, y)
     return float((jnp.argmax(logits, -1) == y).mean())
 
 
@@ -194,17 +240,24 @@ def train_and_evaluate(
     Returns ``model``, ``params`` (the innate network's), ``history`` and
     ``accuracy``: for an SGB the dict of ``innate_accuracy``, otherwise a float. A DGB's
     result also holds ``validation_accuracy``, ``fit_mse`` and ``genome`` (its g-nets).
+    Every result holds ``chance`` (``chance_level`` of the test labels) and ``at_chance``
+    (``at_chance`` of the accuracy, for an SGB its individuals' mean): a network that
+    learnt nothing is flagged, not reported as a result like any other.
     """
+    if not isinstance(config, ClassifierConfig | DGBConfig | DenseConfig):
+        raise TypeError(f"no classifier for a config of type {type(config).__name__}")
+    check_dataset(data)
     if isinstance(config, ClassifierConfig):
         model, params, history = train_classifier(config, data, progress)
         key = jax.random.key(config.seed + 10_000)
         accuracy = innate_accuracy(
             model, params, data.x_test, data.y_test, key, config.eval_individuals
         )
-        return {"model": model, "params": params, "history": history, "accuracy": accuracy}
-    if isinstance(config, DGBConfig):
+        out = {"model": model, "params": params, "history": history, "accuracy": accuracy}
+        headline = float(np.mean(accuracy["individuals"]))
+    elif isinstance(config, DGBConfig):
         dgb, state, history = train_dgb(config, data, progress)
-        return {
+        out = {
             "model": dgb.model,
             "params": state.best_params,
             "history": history,
@@ -213,8 +266,12 @@ def train_and_evaluate(
             "fit_mse": float(state.fit_mse),
             "genome": state.best_gnets,
         }
-    if isinstance(config, DenseConfig):
+        headline = out["accuracy"]
+    else:
         model, params, history = train_dense(config, data, progress)
         accuracy = dense_accuracy(model, params, data.x_test, data.y_test)
-        return {"model": model, "params": params, "history": history, "accuracy": accuracy}
-    raise TypeError(f"no classifier for a config of type {type(config).__name__}")
+        out = {"model": model, "params": params, "history": history, "accuracy": accuracy}
+        headline = accuracy
+    out["chance"] = chance_level(data.y_test)
+    out["at_chance"] = at_chance(headline, data.y_test)
+    return out

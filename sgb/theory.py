@@ -6,6 +6,13 @@ mean network beats the average individual. To second order it is
 ``1/2 * sum_i lambda_i E[rho_i^2] = 1/2 * trace(H diag(sigma^2)) = 1/2 * sum_s H_ss sigma_s^2``
 with ``H`` the Hessian of ``L`` at ``mu``.
 
+The (mu, sigma) step comes in two forms: the paper's (its eq. (14): data term
+plus a weight-decay prior, no entropy; ``gradient_step``, ``train_toy``) and the
+one of the ELBO the book trains (data term plus ``kl_weight`` times the closed-form
+Gaussian KL, whose entropy part keeps sigma away from zero; ``elbo_sigma_step``,
+``elbo_fixed_point``, ``elbo_gradient_step``, ``train_elbo_toy``,
+``genome_fixed_point``).
+
 Everything here takes a loss ``loss_fn(w) -> scalar`` of a pytree of weights
 ``w``; ``mu`` and ``sigma`` are pytrees of the same structure.
 """
@@ -17,10 +24,12 @@ import jax
 import jax.numpy as jnp
 from jax.flatten_util import ravel_pytree
 
-from sgb.celltypes import expand_table
+from sgb.celltypes import block_counts, expand_table, sum_blocks
+from sgb.divergence import check_trajectory
 from sgb.elbo import cross_entropy
 from sgb.layers import SGBMLP
 from sgb.population import individual_kernels
+from sgb.priors import GaussianPrior
 
 Pytree = Any
 LossFn = Callable[[Pytree], jnp.ndarray]
@@ -161,6 +170,31 @@ def hessian_diagonal(loss_fn: LossFn, w: Pytree, chunk_size: int = 256) -> Pytre
     return unravel(diagonal)
 
 
+def population_hessian_diagonal(
+    loss_fn: LossFn,
+    mu: Pytree,
+    sigma: Pytree,
+    key: jax.Array,
+    num_individuals: int,
+    chunk_size: int = 256,
+) -> Pytree:
+    """E_eps[diag H(mu + sigma eps)]: the Hessian diagonal averaged over sampled individuals.
+
+    Same structure as ``mu``; ``num_individuals`` draws, each an exact ``hessian_diagonal``
+    (so P Hessian-vector products per draw). For a smooth loss, Gaussian integration by
+    parts makes d/d sigma_s E[L(mu + sigma eps)] = sigma_s E[H_ss(mu + sigma eps)] exactly,
+    so this, not the diagonal at ``mu``, is the curvature the spreads feel.
+    """
+    _check_positive("num_individuals", num_individuals)
+    _check_same_structure(mu, sigma)
+
+    def one(k):
+        return hessian_diagonal(loss_fn, _perturb(mu, sigma, _normal_like(k, mu)), chunk_size)
+
+    draws = jax.lax.map(one, jax.random.split(key, num_individuals))
+    return jax.tree_util.tree_map(lambda d: d.mean(axis=0), draws)
+
+
 def second_order_trace(
     loss_fn: LossFn,
     mu: Pytree,
@@ -225,6 +259,23 @@ class StepComparison(NamedTuple):
     dsigma_second_order: jnp.ndarray
 
 
+def _check_step_arguments(learning_rate: float, num_samples: int) -> None:
+    _check_positive("num_samples", num_samples)
+    if num_samples < 4:
+        raise ValueError(f"num_samples must be >= 4 (antithetic pairs), got {num_samples}")
+    if learning_rate <= 0:
+        raise ValueError(f"learning_rate must be positive, got {learning_rate}")
+
+
+def _step_mean_and_se(grads: jnp.ndarray, learning_rate: float) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Gradients (n_pairs, P) -> the step -lr * mean and its standard error, each (P,)."""
+    n_pairs = grads.shape[0]
+    return (
+        -learning_rate * grads.mean(axis=0),
+        learning_rate * grads.std(axis=0, ddof=1) / jnp.sqrt(n_pairs),
+    )
+
+
 def gradient_step(
     loss_fn: LossFn,
     mu: Pytree,
@@ -240,11 +291,7 @@ def gradient_step(
     sigma), averaged over ``num_samples`` noise draws taken in antithetic pairs.
     Uses the dense Hessian for the predictions: for small models.
     """
-    _check_positive("num_samples", num_samples)
-    if num_samples < 4:
-        raise ValueError(f"num_samples must be >= 4 (antithetic pairs), got {num_samples}")
-    if learning_rate <= 0:
-        raise ValueError(f"learning_rate must be positive, got {learning_rate}")
+    _check_step_arguments(learning_rate, num_samples)
     _check_same_structure(mu, sigma)
     mu_flat, unravel = ravel_pytree(mu)
     sigma_flat, _ = ravel_pytree(sigma)
@@ -262,12 +309,8 @@ def gradient_step(
     n_pairs = num_samples // 2
     grad_mu, grad_sigma = jax.lax.map(pair, jax.random.split(key, n_pairs))
     scale = -learning_rate
-
-    def mean_and_se(g):
-        return scale * g.mean(axis=0), learning_rate * g.std(axis=0, ddof=1) / jnp.sqrt(n_pairs)
-
-    dmu, dmu_se = mean_and_se(grad_mu)
-    dsigma, dsigma_se = mean_and_se(grad_sigma)
+    dmu, dmu_se = _step_mean_and_se(grad_mu, learning_rate)
+    dsigma, dsigma_se = _step_mean_and_se(grad_sigma, learning_rate)
     hessian = jax.hessian(flat_loss)(mu_flat)
     return StepComparison(
         dmu=dmu,
@@ -346,7 +389,11 @@ def train_toy(
     Each step uses ``num_samples`` fresh noise draws for the gradient; Delta L
     is measured with ``gap_samples`` antithetic draws. ``sigma`` is the raw
     scale (it may change sign; only |sigma| matters, and |sigma| is recorded).
-    Jit-able and vmappable over ``mu0``, ``sigma0`` and ``key``.
+    Jit-able and vmappable over ``mu0``, ``sigma0`` and ``key``. Called outside ``jit``, it
+    runs under the divergence guard: a trajectory that is not finite, or whose (mu, sigma)
+    grow beyond ``sgb.divergence.BLOWUP_FACTOR`` times their start (at least 1), raises
+    ``sgb.divergence.TrainingDiverged``; a caller that jits or vmaps it checks the
+    trajectories it gets with ``sgb.divergence.check_trajectory`` (``guard_toy``).
     """
     for name, value in (("steps", steps), ("num_samples", num_samples)):
         _check_positive(name, value)
@@ -376,12 +423,298 @@ def train_toy(
     final, (mus, sigmas, gaps, ses, preds) = jax.lax.scan(step, params, keys[:-1])
     last = measure(final, keys[-1])
     stack = lambda seq, x: jnp.concatenate([seq, jnp.asarray(x)[None]])  # noqa: E731
-    return Trajectory(
+    trajectory = Trajectory(
         mu=stack(mus, final[0]),
         sigma=jnp.abs(stack(sigmas, final[1])),
         gap=stack(gaps, last[0]),
         gap_stderr=stack(ses, last[1]),
         prediction=stack(preds, last[2]),
+    )
+    if not isinstance(trajectory.mu, jax.core.Tracer):
+        guard_toy(trajectory)
+    return trajectory
+
+
+def guard_toy(trajectory: Trajectory) -> Trajectory:
+    """``trajectory`` (or a batch of them, steps on the last axis) if training did not
+    diverge; else ``sgb.divergence.TrainingDiverged`` naming the first step that did."""
+    check_trajectory(trajectory._asdict(), trained=("mu", "sigma"), what="the toy's")
+    return trajectory
+
+
+# --- the sigma step of the ELBO the book trains ---------------------------------------------
+#
+# Per weight q = N(mu, sigma^2), prior N(0, sigma_p^2), lambda = 1 / sigma_p^2, KL weight c:
+#   F(mu, sigma) = E[L(mu + sigma eps)] + c KL,
+#   KL = log(sigma_p / sigma) + (sigma^2 + mu^2) / (2 sigma_p^2) - 1/2,
+#   dF/dsigma ~ H sigma + c (lambda sigma - 1/sigma)   (second order, H = diag of the Hessian).
+# The -c/sigma comes from log(1/sigma), minus the entropy of q: the part of the KL that the
+# paper's eq. (14) leaves out.
+
+PARAMETERISATIONS = ("sigma", "softplus")
+
+
+def _check_scalar(name: str, value: Any, positive: bool) -> None:
+    """Check a concrete Python number; traced values (under jit or vmap) pass unchecked."""
+    if isinstance(value, int | float) and (value <= 0 if positive else value < 0):
+        bound = "positive" if positive else "non-negative"
+        raise ValueError(f"{name} must be {bound}, got {value!r}")
+
+
+def _check_parameterisation(parameterisation: str) -> None:
+    if parameterisation not in PARAMETERISATIONS:
+        raise ValueError(
+            f"unknown parameterisation {parameterisation!r}; choose one of {PARAMETERISATIONS}"
+        )
+
+
+def softplus_inverse(sigma: jnp.ndarray) -> jnp.ndarray:
+    """rho with softplus(rho) = sigma (sigma > 0): log(exp(sigma) - 1), elementwise."""
+    sigma = jnp.asarray(sigma)
+    return sigma + jnp.log(-jnp.expm1(-sigma))
+
+
+class SigmaStep(NamedTuple):
+    """The expected gradient-descent step on the spread of the ELBO, term by term.
+
+    Every field has the broadcast shape of ``sigma`` and ``curvature``, in the units of
+    the trained parameter (sigma itself, or rho for the softplus parameterisation);
+    ``total = data + prior + entropy``.
+
+    ``data = -lr H sigma`` (the data term's curvature; the paper's whole step),
+    ``prior = -lr c sigma / sigma_p^2`` (the prior's pull towards 0) and
+    ``entropy = +lr c / sigma`` (the entropy of q, which the paper's eq. (14) drops; it
+    pushes sigma up and diverges as sigma -> 0). With ``parameterisation="softplus"``
+    each is multiplied by d sigma / d rho = sigmoid(rho) = 1 - exp(-sigma).
+    """
+
+    data: jnp.ndarray
+    prior: jnp.ndarray
+    entropy: jnp.ndarray
+    total: jnp.ndarray
+
+
+def elbo_sigma_step(
+    sigma: jnp.ndarray,
+    curvature: jnp.ndarray,
+    kl_weight: float,
+    prior_sigma: float,
+    learning_rate: float = 1.0,
+    parameterisation: str = "sigma",
+) -> SigmaStep:
+    """Expected step of sigma under gradient descent on the ELBO the book trains.
+
+    The loss per weight is F = E_eps[L(mu + sigma eps)] + c KL(N(mu, sigma^2) || N(0,
+    sigma_p^2)), KL = log(sigma_p / sigma) + (sigma^2 + mu^2) / (2 sigma_p^2) - 1/2. To
+    second order E[L(mu + sigma eps)] = L(mu) + 1/2 sigma^2 H for the Hessian's diagonal
+    entry H, so dF/dsigma = H sigma + c (sigma / sigma_p^2 - 1 / sigma) and
+
+        Delta sigma = -lr [(H + c lambda) sigma - c / sigma],   lambda = 1 / sigma_p^2.
+
+    The book trains rho with sigma = softplus(rho): then Delta rho = sigmoid(rho) times
+    that (``parameterisation="softplus"``; to first order in lr, Delta sigma =
+    sigmoid(rho)^2 times it). The factor is positive, so the step's zero (the fixed
+    point, ``elbo_fixed_point``) is the same for both; only the speed differs.
+
+    ``sigma`` (> 0) and ``curvature`` (H, loss units per weight^2): arrays of any
+    broadcastable shape; ``kl_weight`` c >= 0: the KL's weight relative to the loss
+    (the book's SGB: 1 / n_train, with L the mean loss per example); ``prior_sigma``:
+    sigma_p, in weight units. ``kl_weight = 0`` gives the paper's step -lr H sigma.
+    """
+    _check_scalar("kl_weight", kl_weight, positive=False)
+    _check_scalar("prior_sigma", prior_sigma, positive=True)
+    _check_scalar("learning_rate", learning_rate, positive=True)
+    _check_parameterisation(parameterisation)
+    sigma, curvature = jnp.asarray(sigma), jnp.asarray(curvature)
+    factor = 1.0 if parameterisation == "sigma" else -jnp.expm1(-sigma)
+    data = -learning_rate * factor * curvature * sigma
+    prior = -learning_rate * factor * kl_weight * sigma / prior_sigma**2
+    entropy = learning_rate * factor * kl_weight / sigma
+    data, prior, entropy = jnp.broadcast_arrays(data, prior, entropy)
+    return SigmaStep(data, prior, entropy, data + prior + entropy)
+
+
+def elbo_fixed_point(curvature: jnp.ndarray, kl_weight: float, prior_sigma: float) -> jnp.ndarray:
+    """sigma*^2 = c / (H + c lambda), where the expected ELBO step of sigma vanishes.
+
+    ``curvature``: H, any shape (loss units per weight^2); returns sigma*^2 of that shape
+    (weight^2). The fixed point is stable: d(step)/d sigma = -lr [(H + c lambda) + c /
+    sigma^2] < 0 there. For H > 0 (convex directions) sigma* < sigma_p: the data pull
+    sigma below the prior's scale but never to zero while c > 0. For -c lambda < H <= 0,
+    sigma* >= sigma_p: negative curvature grows sigma past the prior, up to where the
+    prior stops it. For H <= -c lambda there is no fixed point (returned as ``inf``):
+    within the quadratic model sigma grows without bound; on a real loss it grows until
+    the curvature the population feels, averaged over the scale sigma, rises above -c
+    lambda. ``kl_weight = 0`` gives 0 for H > 0 (the paper's collapse) and ``inf`` else.
+    """
+    _check_scalar("kl_weight", kl_weight, positive=False)
+    _check_scalar("prior_sigma", prior_sigma, positive=True)
+    stiffness = jnp.asarray(curvature) + kl_weight / prior_sigma**2
+    safe = jnp.where(stiffness > 0, stiffness, 1.0)
+    return jnp.where(stiffness > 0, kl_weight / safe, jnp.inf)
+
+
+def gaussian_kl(mu: Pytree, sigma: Pytree, prior_sigma: float) -> jnp.ndarray:
+    """Sum over every weight of KL(N(mu, sigma^2) || N(0, prior_sigma^2)), nats.
+
+    The closed form the book's layers use (``sgb.priors.GaussianPrior.kl``), written as
+    log sigma_p - log sigma + (sigma^2 + mu^2) / (2 sigma_p^2) - 1/2 at |sigma| floored at
+    the dtype's smallest normal number: its sigma-gradient -1/sigma + sigma/sigma_p^2 stays
+    finite for spreads as small as that, and zero for one that underflowed to 0 (as it
+    can with no KL, ``kl_weight = 0``).
+    """
+    _check_scalar("prior_sigma", prior_sigma, positive=True)
+
+    def one(m, s):
+        s = jnp.abs(s)
+        s = jnp.maximum(s, jnp.finfo(jnp.result_type(s, jnp.float32)).tiny)
+        terms = jnp.log(prior_sigma) - jnp.log(s) + (s**2 + m**2) / (2.0 * prior_sigma**2)
+        return jnp.sum(terms - 0.5)
+
+    leaves = zip(jax.tree_util.tree_leaves(mu), jax.tree_util.tree_leaves(sigma), strict=True)
+    return sum(one(m, s) for m, s in leaves)
+
+
+def elbo_objective(
+    loss_fn: LossFn,
+    mu: Pytree,
+    sigma: Pytree,
+    eps: Pytree,
+    kl_weight: float,
+    prior_sigma: float,
+) -> jnp.ndarray:
+    """One draw of the negative ELBO the book trains: L(mu + sigma eps) + c KL(q || p).
+
+    The data term is sampled at ``eps`` (same structure as ``mu``); the KL is the
+    closed form ``gaussian_kl``, exact, as in ``sgb.layers`` for a Gaussian prior.
+    """
+    return loss_fn(_perturb(mu, sigma, eps)) + kl_weight * gaussian_kl(mu, sigma, prior_sigma)
+
+
+class ElboStepComparison(NamedTuple):
+    """One gradient step of the ELBO on (mu, sigma), measured and predicted (flat, (P,)).
+
+    ``dmu``/``dsigma``: the step averaged over noise draws; ``*_stderr``: its Monte
+    Carlo standard error. ``dmu_predicted = -lr (grad L(mu) + c mu / sigma_p^2)``;
+    ``predicted``: ``elbo_sigma_step`` at diag(H) (data, prior and entropy terms);
+    ``paper = -lr H sigma``, the appendix's step.
+    """
+
+    dmu: jnp.ndarray
+    dmu_stderr: jnp.ndarray
+    dsigma: jnp.ndarray
+    dsigma_stderr: jnp.ndarray
+    dmu_predicted: jnp.ndarray
+    predicted: SigmaStep
+    paper: jnp.ndarray
+
+
+def elbo_gradient_step(
+    loss_fn: LossFn,
+    mu: Pytree,
+    sigma: Pytree,
+    key: jax.Array,
+    learning_rate: float,
+    kl_weight: float,
+    prior_sigma: float,
+    num_samples: int = 1000,
+) -> ElboStepComparison:
+    """One step of gradient descent on the sampled ELBO (``elbo_objective``), against theory.
+
+    The sampled gradient in (mu, sigma) is averaged over ``num_samples`` draws in
+    antithetic pairs. Uses the dense Hessian for the predictions: for small models.
+    """
+    _check_step_arguments(learning_rate, num_samples)
+    _check_scalar("kl_weight", kl_weight, positive=False)
+    _check_scalar("prior_sigma", prior_sigma, positive=True)
+    _check_same_structure(mu, sigma)
+    mu_flat, unravel = ravel_pytree(mu)
+    sigma_flat, _ = ravel_pytree(sigma)
+    flat_loss = lambda w: loss_fn(unravel(w))  # noqa: E731
+    grad_fn = jax.grad(
+        lambda m, s, e: elbo_objective(flat_loss, m, s, e, kl_weight, prior_sigma),
+        argnums=(0, 1),
+    )
+
+    def pair(k):
+        eps = jax.random.normal(k, mu_flat.shape, mu_flat.dtype)
+        gm_plus, gs_plus = grad_fn(mu_flat, sigma_flat, eps)
+        gm_minus, gs_minus = grad_fn(mu_flat, sigma_flat, -eps)
+        return 0.5 * (gm_plus + gm_minus), 0.5 * (gs_plus + gs_minus)
+
+    grad_mu, grad_sigma = jax.lax.map(pair, jax.random.split(key, num_samples // 2))
+    dmu, dmu_se = _step_mean_and_se(grad_mu, learning_rate)
+    dsigma, dsigma_se = _step_mean_and_se(grad_sigma, learning_rate)
+    hessian = jax.hessian(flat_loss)(mu_flat)
+    mu_gradient = jax.grad(flat_loss)(mu_flat) + kl_weight * mu_flat / prior_sigma**2
+    return ElboStepComparison(
+        dmu=dmu,
+        dmu_stderr=dmu_se,
+        dsigma=dsigma,
+        dsigma_stderr=dsigma_se,
+        dmu_predicted=-learning_rate * mu_gradient,
+        predicted=elbo_sigma_step(
+            sigma_flat, jnp.diag(hessian), kl_weight, prior_sigma, learning_rate
+        ),
+        paper=-learning_rate * hessian @ sigma_flat,
+    )
+
+
+class ElboTrajectory(NamedTuple):
+    """Gradient descent on the ELBO of a 1-D loss; ``mu`` and ``sigma`` have shape (steps + 1,)."""
+
+    mu: jnp.ndarray
+    sigma: jnp.ndarray
+
+
+def train_elbo_toy(
+    loss: Callable[[jnp.ndarray], jnp.ndarray],
+    mu0: float,
+    sigma0: float,
+    key: jax.Array,
+    kl_weight: float,
+    prior_sigma: float = 1.0,
+    steps: int = 1000,
+    learning_rate: float = 0.05,
+    num_samples: int = 8,
+    parameterisation: str = "sigma",
+) -> ElboTrajectory:
+    """Plain gradient descent on the sampled ELBO of a 1-D weight, as the book trains it.
+
+    Each step draws ``num_samples`` fresh eps for the data term; the KL (weight
+    ``kl_weight``, prior N(0, ``prior_sigma``^2)) is exact. ``parameterisation``:
+    ``"sigma"`` descends on sigma itself (|sigma| is recorded); ``"softplus"`` on rho with
+    sigma = softplus(rho), as the book's layers do. Jit-able and vmappable over ``mu0``,
+    ``sigma0``, ``key`` and ``kl_weight``; ``prior_sigma`` must be a Python number.
+    """
+    for name, value in (("steps", steps), ("num_samples", num_samples)):
+        _check_positive(name, value)
+    _check_scalar("learning_rate", learning_rate, positive=True)
+    _check_scalar("sigma0", sigma0, positive=True)
+    _check_parameterisation(parameterisation)
+    to_sigma = jnp.abs if parameterisation == "sigma" else jax.nn.softplus
+
+    def objective(params, eps):
+        m, raw = params
+        draws = jax.vmap(
+            lambda e: elbo_objective(loss, m, to_sigma(raw), e, kl_weight, prior_sigma)
+        )
+        return jnp.mean(draws(eps))
+
+    grad_fn = jax.grad(objective)
+
+    def step(params, k):
+        g = grad_fn(params, jax.random.normal(k, (num_samples,)))
+        new = tuple(p - learning_rate * gp for p, gp in zip(params, g, strict=True))
+        return new, (params[0], to_sigma(params[1]))
+
+    sigma0 = jnp.asarray(sigma0, jnp.float32)
+    raw0 = sigma0 if parameterisation == "sigma" else softplus_inverse(sigma0)
+    params = (jnp.asarray(mu0, jnp.float32), raw0)
+    final, (mus, sigmas) = jax.lax.scan(step, params, jax.random.split(key, steps))
+    return ElboTrajectory(
+        mu=jnp.concatenate([mus, final[0][None]]),
+        sigma=jnp.concatenate([sigmas, to_sigma(final[1])[None]]),
     )
 
 
@@ -447,3 +780,51 @@ def network_loss(view: SynapseView, x: jnp.ndarray, y: jnp.ndarray, metric: str)
         raise ValueError(f"unknown metric {metric!r}; choose one of {sorted(NETWORK_METRICS)}")
     fn = NETWORK_METRICS[metric]
     return lambda weights: fn(view.forward(weights, x), y)
+
+
+class GenomeFixedPoint(NamedTuple):
+    """One SGB layer's learned spreads against the ELBO's fixed point, per type pair.
+
+    Every field has the type table's shape (k_in, k_out). ``sigma2``: the learned
+    softplus(rho)^2 (weight^2); ``count``: synapses per pair; ``curvature``: the pair's
+    effective H, the sum of the data term's Hessian diagonal over its synapses divided by
+    the number of times the KL counts the pair (``count`` with synapse counting, 1 with
+    table counting), in loss units per weight^2; ``predicted``: ``elbo_fixed_point`` of
+    it, c / (curvature + c lambda) (weight^2).
+    """
+
+    sigma2: jnp.ndarray
+    count: jnp.ndarray
+    curvature: jnp.ndarray
+    predicted: jnp.ndarray
+
+
+def genome_fixed_point(
+    model: SGBMLP, params: Pytree, hessian_diag: dict, kl_weight: float
+) -> dict[str, GenomeFixedPoint]:
+    """Per layer, each type pair's learned sigma^2 next to c / (H + c lambda).
+
+    ``hessian_diag``: per layer, the (n_in, n_out) diagonal of the data term's Hessian
+    over the expanded synapses at the trained means (``hessian_diagonal`` of a
+    ``network_loss`` of ``synapse_view``), with the data term in the units the ELBO uses
+    (the book's: mean loss per training example, so ``kl_weight`` = kl_scale / n_train).
+    A type pair's spread multiplies every one of its synapses' noise, so the data term's
+    sigma-gradient is sigma times the sum of their H_ss, and the KL counts it ``count``
+    times (synapse counting) or once (table counting). Needs a Gaussian prior.
+    """
+    if not isinstance(model.prior, GaussianPrior):
+        raise ValueError(f"the fixed point needs a Gaussian prior, got {model.prior!r}")
+    layers = params["params"]
+    out = {}
+    for name, diagonal in hessian_diag.items():
+        sigma = jax.nn.softplus(layers[name]["genome"]["rho"])
+        counts = jnp.asarray(block_counts(diagonal.shape, sigma.shape), diagonal.dtype)
+        summed = sum_blocks(diagonal, sigma.shape)
+        curvature = summed / counts if model.kl_counting == "synapse" else summed
+        out[name] = GenomeFixedPoint(
+            sigma2=sigma**2,
+            count=counts,
+            curvature=curvature,
+            predicted=elbo_fixed_point(curvature, kl_weight, model.prior.sigma),
+        )
+    return out

@@ -19,7 +19,8 @@ import optax
 from flax.training.train_state import TrainState
 from tqdm.auto import tqdm
 
-from sgb.divergence import check_loss, check_params
+from sgb import validation
+from sgb.divergence import Guard, likely_cause
 from sgb.elbo import cross_entropy, elbo_loss
 
 DataLoss = Callable[[jnp.ndarray, jnp.ndarray], jnp.ndarray]
@@ -40,18 +41,35 @@ def train_loop(
     params_of: Callable[[Any], Any] = lambda state: state.params,
     progress: bool = True,
     desc: str = "training",
+    num_classes: int | None = None,
+    guard: Guard | None = None,
 ) -> tuple[Any, list[dict[str, float]]]:
     """Run ``num_steps`` minibatch steps of ``batch_size`` examples of (x, y).
 
     Returns the final state and per-epoch records ``{"epoch", **mean metrics}``
     (the last one over a partial epoch if ``num_steps`` is not a whole number of epochs).
-    Raises ``sgb.divergence.TrainingDiverged`` at the first step whose ``metrics["loss"]``
-    is not finite, or if the final ``params_of(state)`` holds a non-finite value.
+    ``x`` must be non-empty and finite, ``y`` as long (finite, or with ``num_classes``
+    integer labels in [0, num_classes)): checked once, before the first step.
+    ``guard`` (``sgb.divergence.Guard``; default: a fresh one that names rho overflow or
+    the learning rate as the likely cause) raises ``sgb.divergence.TrainingDiverged`` at the
+    first step whose ``metrics["loss"]`` is not finite or blew up, and if the final
+    ``params_of(state)`` holds a non-finite value; ``hook`` may use it too.
     """
-    if num_steps < 1 or batch_size < 1:
-        raise ValueError(f"num_steps and batch_size must be >= 1, got {num_steps}, {batch_size}")
-    if hook is not None and hook_every < 1:
+    validation.integer("num_steps", num_steps)
+    validation.integer("batch_size", batch_size)
+    validation.seed("seed", seed)
+    if hook is not None and (isinstance(hook_every, bool) or not hook_every >= 1):
         raise ValueError(f"hook_every must be >= 1 with a hook, got {hook_every}")
+    x = validation.finite_array("x", x, min_ndim=1)
+    if num_classes is not None:
+        y = validation.labels("y", y, validation.integer("num_classes", num_classes))
+    else:
+        y = validation.finite_array("y", y, min_ndim=1)
+    if len(y) != len(x):
+        raise ValueError(f"x and y must hold as many examples, got {len(x)} and {len(y)}")
+    current = {"state": state}
+    if guard is None:
+        guard = Guard(cause=lambda: likely_cause(params=params_of(current["state"])))
     rng = np.random.default_rng(seed)
     key = jax.random.key(seed)
     n_batches = max(1, len(x) // batch_size)
@@ -66,16 +84,17 @@ def train_loop(
         idx = order[b * batch_size : (b + 1) * batch_size]
         key, step_key = jax.random.split(key)
         state, metrics = step(state, x[idx], y[idx], step_key)
-        check_loss(float(metrics["loss"]), t + 1)
+        current["state"] = state
+        guard.loss(metrics["loss"], t + 1)
         sums = {k: sums.get(k, 0.0) + v for k, v in metrics.items()}
         count += 1
         if hook is not None and (t + 1) % hook_every == 0:
-            state = hook(state)
+            state = current["state"] = hook(state)
         if b == n_batches - 1 or t == num_steps - 1:
             means = {k: float(v) / count for k, v in sums.items()}
             history.append({"epoch": (t + 1) / n_batches, **means})
             sums, count = {}, 0
-    check_params(params_of(state), num_steps)
+    guard.params(params_of(state), num_steps)
     return state, history
 
 
@@ -116,15 +135,21 @@ def fit_elbo(
     seed: int,
     local_reparam: bool = False,
     progress: bool = True,
+    num_classes: int | None = None,
 ) -> tuple[Any, list[dict[str, float]]]:
     """Train an SGB model's ``params`` on the negative ELBO with Adam for ``epochs`` passes.
 
     Returns the trained params and one dict per epoch with the mean ``loss``,
     ``data`` and ``kl`` terms over its minibatches. ``local_reparam`` selects the
-    gradient estimator of ``sgb.elbo.elbo_loss``.
+    gradient estimator of ``sgb.elbo.elbo_loss``; ``num_classes``, when given, is checked
+    against the labels ``y`` (``train_loop``).
     """
-    if epochs < 1:
-        raise ValueError(f"epochs must be >= 1, got {epochs}")
+    validation.integer("epochs", epochs)
+    validation.integer("batch_size", batch_size)
+    validation.integer("num_samples", num_samples)
+    validation.non_negative("kl_weight", kl_weight)
+    validation.positive("learning_rate", learning_rate)
+    validation.array("x", x, min_ndim=1)
     own = jax.tree_util.tree_map(jnp.copy, params)  # own buffers, so steps can donate them
     state = adam_state(model.apply, own, learning_rate)
 
@@ -156,5 +181,6 @@ def fit_elbo(
         num_steps=steps,
         seed=seed,
         progress=progress,
+        num_classes=num_classes,
     )
     return state.params, history

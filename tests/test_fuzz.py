@@ -4,10 +4,19 @@ Each example draws every argument from its valid range, then makes at most one o
 invalid. An invalid argument must give a ``ValueError`` or ``TypeError`` whose message
 names it; a fully valid draw must give finite output. Anything else (an error from deep
 inside jax, flax or numpy, a silent nan or inf, an invalid value accepted) fails.
+The targets: the configs, layers, priors and statistics; the low-level functions (the
+genome's KL, the individual kernel, the noise, the cell-type helpers, the labels of the
+loss); the data loaders' seeds and sizes; the population and PPO entry points; the
+evaluation's inputs; the one softplus; and the files the package reads, each damaged
+one way (a damaged file must be a ``CorruptFile`` naming it, or load exactly as saved).
 The examples are derandomised and no database is kept, so every run sees the same ones:
-130 per test, 20 for the layer and 15 for the MLP with its ELBO (each of their examples
-initialises and runs its model as one jitted program, so it compiles once), 815 in all.
+130 per test unless stated (20 for the layer and 15 for the MLP with its ELBO: each of
+their examples initialises and runs its model as one jitted program, so it compiles
+once), 1515 in all.
 """
+
+import tempfile
+from pathlib import Path
 
 import jax
 import jax.numpy as jnp
@@ -168,16 +177,20 @@ def test_mlp_and_elbo(data):
             "cell_types": st.tuples(st.just(None), st.integers(1, width), st.just(None)),
             "num_samples": st.integers(1, 3),
             "kl_weight": st.floats(0, 1),
+            "y": st.just(jnp.array([0, 1, 2, 0])),
         },
         {
             "widths": st.sampled_from([(), (0, 3), (2.5, 3), "8", None]),
             "cell_types": st.sampled_from([(None,), (None, width + 1, None), (None, 0, None), 3]),
             "num_samples": BAD_INTEGERS,
             "kl_weight": BAD_NON_NEGATIVE,
+            "y": st.sampled_from(
+                [jnp.array([0, 1, 3, 0]), jnp.array([0, -1, 2, 0]), jnp.zeros(4), jnp.zeros(3, int)]
+            ),
         },
     )
     x = jnp.ones((4, 5))
-    y = jnp.array([0, 1, 2, 0])
+    y = args["y"]
 
     def call():
         model = SGBMLP(widths=args["widths"], cell_types=args["cell_types"], in_features=5)
@@ -326,3 +339,378 @@ def test_classifier_configs(data):
         return [config.learning_rate, dense.learning_rate]
 
     expect(call, bad)
+
+
+# ------------------------------------------------------------------ damaged files
+# Each example damages a good file one way (a flipped bit, a cut, a run of zeros, junk
+# appended, an empty file): loading it must raise a ``CorruptFile`` that names it, or
+# give back exactly what was saved. Never another error, never other values.
+
+DAMAGE = st.one_of(
+    st.tuples(st.just("flip"), st.floats(0, 1, exclude_max=True), st.integers(0, 7)),
+    st.tuples(st.just("cut"), st.floats(0, 1, exclude_max=True), st.just(0)),
+    st.tuples(st.just("zeros"), st.floats(0, 1, exclude_max=True), st.integers(1, 64)),
+    st.tuples(st.just("junk"), st.just(0.0), st.integers(1, 64)),
+    st.tuples(st.just("empty"), st.just(0.0), st.just(0)),
+)
+
+
+def damaged(good: bytes, damage: tuple) -> bytes:
+    kind, where, size = damage
+    i = int(where * len(good))
+    if kind == "flip":
+        return good[:i] + bytes([good[i] ^ (1 << size)]) + good[i + 1 :]
+    if kind == "cut":
+        return good[:i]
+    if kind == "zeros":
+        return good[:i] + bytes(min(size, len(good) - i)) + good[i + size :]
+    if kind == "junk":
+        return good + bytes(range(size))
+    return b""
+
+
+@pytest.fixture(scope="module")
+def state_file(tmp_path_factory):
+    from sgb import resume
+
+    state = {"w": jnp.linspace(-1.0, 1.0, 40), "n": jnp.arange(3), "key": jax.random.key(7)}
+    path = tmp_path_factory.mktemp("state") / "run.state.npz"
+    resume.save(path, state, {"seed": 1}, {"chunks": 2, "records": [0.5]})
+    return path, path.read_bytes(), state
+
+
+@settings(FUZZ, max_examples=200)
+@given(damage=DAMAGE)
+def test_damaged_state_files(state_file, damage):
+    from sgb import resume
+    from sgb.validation import CorruptFile
+
+    good_path, good, state = state_file
+    with tempfile.TemporaryDirectory() as directory:
+        path = Path(directory) / "run.state.npz"
+        path.write_bytes(damaged(good, damage))
+        try:
+            loaded, progress = resume.load(path, state, {"seed": 1}, ("chunks", "records"))
+        except CorruptFile as error:
+            assert str(path) in str(error) and "delete it" in str(error)
+            return
+    assert progress == {"chunks": 2, "records": [0.5]}
+    leaves = zip(jax.tree_util.tree_leaves(loaded), jax.tree_util.tree_leaves(state), strict=True)
+    for a, b in leaves:
+        if jax.dtypes.issubdtype(a.dtype, jax.dtypes.prng_key):
+            a, b = jax.random.key_data(a), jax.random.key_data(b)
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.fixture(scope="module")
+def checkpoint(tmp_path_factory):
+    from reach import reach_config
+
+    from sgb.rl import checkpoints, ppo
+    from sgb.rl.normalizer import init_normalizer
+
+    config = reach_config(2, network=NetworkConfig(hidden=(4,), cell_types=2))
+    result = ppo.TrainResult(
+        config, ppo.init_params(config, 0), init_normalizer(2), [64], [-9.5], 1e3, 1.0
+    )
+    path = checkpoints.save(tmp_path_factory.mktemp("agent") / "agent.msgpack", result)
+    return path.read_bytes(), path.with_suffix(".json").read_bytes(), checkpoints.load(path)
+
+
+@settings(FUZZ, max_examples=40)
+@given(damage=DAMAGE, which=st.sampled_from(["msgpack", "json"]))
+def test_damaged_checkpoints(checkpoint, damage, which):
+    from sgb.rl import checkpoints
+    from sgb.validation import CorruptFile
+
+    good_msgpack, good_sidecar, (config, params, normalizer, meta) = checkpoint
+    with tempfile.TemporaryDirectory() as directory:
+        path = Path(directory) / "agent.msgpack"
+        files = {"msgpack": [path, good_msgpack], "json": [path.with_suffix(".json"), good_sidecar]}
+        files[which][1] = damaged(files[which][1], damage)
+        for file, content in files.values():
+            file.write_bytes(content)
+        try:
+            loaded = checkpoints.load(path)
+        except CorruptFile as error:
+            assert str(files[which][0]) in str(error) and "delete it" in str(error)
+            return
+    assert loaded[0] == config and loaded[3] == meta
+    expected = jax.tree_util.tree_leaves((params, normalizer))
+    for a, b in zip(jax.tree_util.tree_leaves(loaded[1:3]), expected, strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+# ------------------------------------------------------------------ low-level functions
+
+
+@settings(FUZZ, max_examples=60)
+@given(st.data())
+def test_genome_kl_and_individual_kernel(data):
+    from sgb.layers import genome_kl, individual_kernel
+
+    k_in, k_out = data.draw(st.sampled_from([(1, 1), (2, 3)]))
+    table = jnp.full((k_in, k_out), 0.1)
+    key = jax.random.key(0)
+    which = data.draw(st.sampled_from(["genome_kl", "individual_kernel"]))
+    if which == "genome_kl":
+        args, bad = draw_args(
+            data.draw,
+            {
+                "prior": st.sampled_from([GaussianPrior(0.1), ScaleMixturePrior()]),
+                "sigma": st.just(table),
+                "shape": st.just((4, 5)),
+                "counting": st.sampled_from(["synapse", "table"]),
+                "key": st.just(key),
+            },
+            {
+                "prior": st.sampled_from([None, "gaussian", 0.1]),
+                "sigma": st.sampled_from([jnp.ones((k_in + 1, k_out)), -table, table * jnp.nan]),
+                "shape": st.sampled_from([(4,), (4, 0), (4, 5.5), (0, 5), "45", None]),
+                "counting": st.sampled_from(["bogus", None]),
+                "key": st.sampled_from([None, 3, jnp.zeros(3, jnp.uint32)]),
+            },
+        )
+        if bad == "key" and isinstance(args["prior"], GaussianPrior):
+            args["prior"] = ScaleMixturePrior()  # only the Monte Carlo KL draws with the key
+        expect(
+            lambda: genome_kl(
+                args["prior"], table, args["sigma"], args["shape"], args["counting"], args["key"]
+            ),
+            bad,
+        )
+    else:
+        noise = jnp.ones((2, 4, 5))
+        args, bad = draw_args(
+            data.draw,
+            {"rho": st.just(table - 5.0), "noise": st.sampled_from([noise, noise[0]])},
+            {
+                "rho": st.sampled_from(
+                    [jnp.ones((k_in, k_out + 1)), jnp.ones((k_in, k_out), int), None]
+                ),
+                "noise": st.sampled_from(
+                    [jnp.ones(5), jnp.ones((4, 1)), jnp.ones((4, 5), int), "x"]
+                ),
+            },
+        )
+        if bad == "noise" and k_out == 1 and np.shape(args["noise"]) == (4, 1):
+            bad = None  # one output type fits one neuron
+        expect(lambda: individual_kernel(table, args["rho"], args["noise"]), bad)
+
+
+@FUZZ
+@given(st.data())
+def test_noise_and_cell_type_helpers(data):
+    from sgb.celltypes import assign_cell_types, block_counts, sum_blocks, type_pair_block
+    from sgb.noise import normal_from_bits, standard_normal
+
+    which = data.draw(
+        st.sampled_from(["noise", "bits", "assign", "counts", "sum_blocks", "pair_block"])
+    )
+    n = data.draw(st.integers(1, 9))
+    k = data.draw(st.integers(1, n))
+    if which == "noise":
+        args, bad = draw_args(
+            data.draw,
+            {"key": st.just(jax.random.key(1)), "shape": st.sampled_from([(), (3,), (n, k)])},
+            {
+                "key": st.sampled_from([None, 0, jnp.zeros(3, jnp.uint32), "key"]),
+                "shape": st.sampled_from([(-1,), (2.5,), "3", None, (2, None)]),
+            },
+        )
+        expect(lambda: standard_normal(args["key"], args["shape"]), bad)
+    elif which == "bits":
+        args, bad = draw_args(
+            data.draw,
+            {"bits": st.just(jnp.arange(n, dtype=jnp.uint32))},
+            {"bits": st.sampled_from([jnp.arange(3.0), jnp.arange(3), None, "bits"])},
+        )
+        expect(lambda: normal_from_bits(args["bits"]), bad)
+    elif which == "assign":
+        args, bad = draw_args(
+            data.draw,
+            {"n": st.just(n), "k": st.just(k)},
+            {"n": BAD_INTEGERS, "k": st.one_of(BAD_INTEGERS, st.just(n + 1), st.just("3"))},
+        )
+        out = expect(lambda: assign_cell_types(args["n"], args["k"]), bad)
+        if out is not None:
+            assert out.shape == (n,) and set(out.tolist()) == set(range(k))
+    elif which == "counts":
+        args, bad = draw_args(
+            data.draw,
+            {"shape": st.just((n, 3)), "types": st.just((k, 2))},
+            {
+                "shape": st.sampled_from([(n,), (0, 3), (2.5, 3), None, "n3"]),
+                "types": st.sampled_from([(n + 1, 2), (k, 0), (k,), None, (k, 2.5)]),
+            },
+        )
+        out = expect(lambda: block_counts(args["shape"], args["types"]), bad)
+        if out is not None:
+            assert out.sum() == 3 * n
+    elif which == "sum_blocks":
+        args, bad = draw_args(
+            data.draw,
+            {"x": st.just(jnp.ones((n, 3))), "types": st.just((k, 3))},
+            {
+                "x": st.sampled_from([None, [1.0, 2.0]]),
+                "types": st.sampled_from([(n + 1, 3), (k,), (k, 0), None, (k, 2.5)]),
+            },
+        )
+        out = expect(lambda: sum_blocks(args["x"], args["types"]), bad)
+        if out is not None:
+            assert float(out.sum()) == 3 * n
+    else:
+        args, bad = draw_args(
+            data.draw,
+            {
+                "kernel": st.just(jnp.ones((n, 2))),
+                "types": st.just((k, 2)),
+                "pair": st.just((k - 1, 1)),
+            },
+            {
+                "kernel": st.sampled_from([None, "kernel"]),
+                "types": st.sampled_from([(n + 1, 2), (k,), (0, 2), None]),
+                "pair": st.sampled_from([(k, 0), (-1, 0), (0,), (0.5, 0), None]),
+            },
+        )
+        expect(lambda: type_pair_block(args["kernel"], args["types"], args["pair"]), bad)
+
+
+@settings(FUZZ, max_examples=60)
+@given(x=st.floats(-30, 88, width=32), big=st.floats(88, 3.3999999521443642e38, width=32))
+def test_softplus_is_todays_in_the_normal_range_and_never_overflows(x, big):
+    from sgb.layers import softplus
+
+    x32 = jnp.float32(x)
+    assert softplus(x32) == jnp.log1p(jnp.exp(x32))  # bit for bit the kernels' former one
+    assert np.isfinite(float(softplus(jnp.float32(big))))
+    assert float(softplus(jnp.float32(big))) >= float(softplus(x32))
+
+
+@FUZZ
+@given(st.data())
+def test_labels_and_evaluation_inputs(data):
+    from sgb.classifiers import DenseClassifier
+    from sgb.elbo import cross_entropy
+    from sgb.supervised import dense_accuracy
+
+    which = data.draw(st.sampled_from(["cross_entropy", "dense_accuracy"]))
+    x = jnp.linspace(-1.0, 1.0, 12).reshape(4, 3)
+    if which == "cross_entropy":
+        args, bad = draw_args(
+            data.draw,
+            {"labels": st.lists(st.integers(0, 2), min_size=4, max_size=4).map(jnp.array)},
+            {
+                "labels": st.sampled_from(
+                    [
+                        jnp.array([0, 1, 3, 0]),
+                        jnp.array([-1, 0, 0, 0]),
+                        jnp.zeros(4),
+                        jnp.zeros(3, int),
+                        None,
+                    ]
+                )
+            },
+        )
+        expect(lambda: cross_entropy(x, args["labels"]), bad)
+    else:
+        model = DenseClassifier((3,), input_shape=(3,))
+        params = model.init(jax.random.key(0), x)
+        args, bad = draw_args(
+            data.draw,
+            {
+                "x": st.just(x),
+                "y": st.lists(st.integers(0, 2), min_size=4, max_size=4).map(np.array),
+            },
+            {
+                "x": st.sampled_from(
+                    [x.at[1, 1].set(jnp.nan), x.at[0, 0].set(jnp.inf), x[:0], None]
+                ),
+                "y": st.sampled_from(
+                    [np.array([0, 1, 3, 0]), np.array([0, -1, 0, 0]), np.zeros(4), np.zeros(3, int)]
+                ),
+            },
+        )
+        out = expect(lambda: [dense_accuracy(model, params, args["x"], args["y"])], bad)
+        if out is not None:
+            assert 0.0 <= out[0] <= 1.0
+
+
+@settings(FUZZ, max_examples=40)
+@given(st.data())
+def test_data_loader_arguments(data):
+    from sgb import data as datasets
+
+    which = data.draw(st.sampled_from(["digits", "mnist1d", "load"]))
+    seeds = st.integers(0, 2**32 - 1)
+    bad_seeds = st.one_of(BAD_INTEGERS.filter(lambda v: v != 0), st.just(2**32), st.just(-1))
+    if which == "digits":
+        args, bad = draw_args(
+            data.draw,
+            {"seed": seeds, "test_fraction": st.floats(0.05, 0.95)},
+            {
+                "seed": bad_seeds,
+                "test_fraction": st.one_of(st.floats(1, 2), st.floats(-1, 0), BAD_REAL),
+            },
+        )
+        expect(lambda: datasets.digits(**args).x_train, bad)
+    elif which == "mnist1d":
+        args, bad = draw_args(
+            data.draw,
+            {"seed": seeds, "num_samples": st.integers(10, 60)},
+            {"seed": bad_seeds, "num_samples": st.one_of(BAD_INTEGERS, st.integers(1, 9))},
+        )
+        expect(lambda: datasets.mnist1d(**args).x_test, bad)
+    else:
+        args, bad = draw_args(
+            data.draw,
+            {"name": st.sampled_from(["digits"]), "seed": seeds},
+            {"name": st.sampled_from(["imagenet", None, 3]), "seed": bad_seeds},
+        )
+        expect(lambda: datasets.load(**args).x_test, bad)
+
+
+@settings(FUZZ, max_examples=40)
+@given(st.data())
+def test_population_and_ppo_entry_points(data):
+    from reach import SPEC, reach_config
+
+    from sgb.rl import ppo
+    from sgb.rl.normalizer import Normalizer
+    from sgb.rl.population import population_returns
+
+    network = NetworkConfig(hidden=(4,), cell_types=2)
+    actor = ppo.init_params(reach_config(network=network), 0).actor
+    good = Normalizer(jnp.asarray(3.0), jnp.zeros(2), jnp.ones(2))
+    args, bad = draw_args(
+        data.draw,
+        {
+            "actor_params": st.just(actor),
+            "normalizer": st.just(good),
+            "n_individuals": st.just(2),
+            "episodes": st.just(1),
+            "episode_length": st.just(3),
+            "seed": st.integers(0, 2**32 - 1),
+        },
+        {
+            "actor_params": st.sampled_from(
+                [None, {"w": 1}, jax.tree_util.tree_map(lambda p: p * jnp.nan, actor)]
+            ),
+            "normalizer": st.sampled_from(
+                [
+                    None,
+                    good._replace(mean=jnp.zeros(3)),
+                    good._replace(m2=jnp.full(2, jnp.nan)),
+                    good._replace(count=jnp.asarray(-1.0)),
+                ]
+            ),
+            "n_individuals": BAD_INTEGERS,
+            "episodes": BAD_INTEGERS,
+            "episode_length": BAD_INTEGERS,
+            "seed": st.one_of(st.sampled_from([2.5, -1, 2**32, "0", None])),
+        },
+    )
+    expect(lambda: population_returns(SPEC, network, **args), bad)
+    if bad is None:
+        with pytest.raises(TypeError, match="seed"):
+            ppo.init_params(reach_config(network=network), float(args["seed"]) + 0.5)

@@ -4,6 +4,8 @@ import importlib.util
 import json
 import os
 import re
+import shutil
+import signal
 import subprocess
 import sys
 import tomllib
@@ -88,16 +90,130 @@ def test_install_cell_installs_the_launch_buttons_ref_with_the_pins():
     source = install_cell.cell_source()
     assert f'REF = "{ref}"' in source
     assert f"sgb-companion @ git+{url}@" in source
-    assert "/requirements.txt" in source and '"-c", pins' in source
+    assert "/requirements.txt" in source and '"-c", constraints' in source
 
 
-def _run_install_cell(tmp_path: Path, prelude: str, **env: str) -> subprocess.CompletedProcess:
+def test_the_install_cell_pins_only_the_stack_and_requirements_pin_all_of_it():
+    requirements = _pins((ROOT / "requirements.txt").read_text().splitlines())
+    stack = {_normalise(name) for name in install_cell.STACK}
+    assert stack <= set(requirements), f"unpinned: {sorted(stack - set(requirements))}"
+    assert {"numpy", "pandas", "scipy", "matplotlib", "scikit-learn"}.isdisjoint(stack)
+
+
+def _run_install_cell(
+    tmp_path: Path, prelude: str, pythonpath: list[Path] = (), **env: str
+) -> subprocess.CompletedProcess:
     script = tmp_path / "cell.py"
     script.write_text(prelude + install_cell.cell_source() + "\n")
-    environment = {k: v for k, v in os.environ.items() if not k.startswith("SGB_")} | env
+    environment = {k: v for k, v in os.environ.items() if not k.startswith("SGB_")}
+    environment["SGB_CONSTRAINTS"] = str(ROOT / "requirements.txt")
+    if pythonpath:
+        paths = [str(p) for p in pythonpath] + [environment.get("PYTHONPATH", "")]
+        environment["PYTHONPATH"] = os.pathsep.join(p for p in paths if p)
     return subprocess.run(
-        [sys.executable, str(script)], capture_output=True, text=True, env=environment
+        [sys.executable, str(script)],
+        capture_output=True,
+        text=True,
+        env=environment | env,
+        cwd=tmp_path,
     )
+
+
+def _distribution(site: Path, name: str, version: str) -> None:
+    """Make ``site`` hold the distribution ``name`` at ``version``: a module and its
+    metadata, as pip leaves them."""
+    (site / name).mkdir(parents=True, exist_ok=True)
+    (site / name / "__init__.py").write_text(f'version = "{version}"\n')
+    for old in site.glob(f"{name}-*.dist-info"):
+        shutil.rmtree(old)
+    info = site / f"{name}-{version}.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text(f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n")
+    (info / "top_level.txt").write_text(f"{name}\n")
+
+
+# A stand-in for pip, found first on PYTHONPATH by the cell's `python -m pip`: it keeps the
+# command line and the constraints it was given, moves the distribution `sgbfake` to
+# version 2.0 (what pip does to a package it upgrades) and prints what FAKE_PIP_SAYS.
+_FAKE_PIP = """\
+import os, shutil, sys
+from pathlib import Path
+out = Path(os.environ["FAKE_PIP_LOG"])
+(out / "argv.txt").write_text(" ".join(sys.argv[1:]))
+constraints = sys.argv[sys.argv.index("-c") + 1]
+shutil.copy(constraints, out / "constraints.txt")
+site = Path(os.environ["FAKE_SITE"])
+for old in site.glob("sgbfake-*.dist-info"):
+    shutil.rmtree(old)
+info = site / "sgbfake-2.0.dist-info"
+info.mkdir()
+(info / "METADATA").write_text("Metadata-Version: 2.1\\nName: sgbfake\\nVersion: 2.0\\n")
+(info / "top_level.txt").write_text("sgbfake\\n")
+print(os.environ.get("FAKE_PIP_SAYS", ""), file=sys.stderr)
+"""
+
+
+def _run_with_fake_pip(tmp_path: Path, prelude: str, **env: str) -> subprocess.CompletedProcess:
+    fake, site, log = tmp_path / "fake_pip", tmp_path / "site", tmp_path / "log"
+    (fake / "pip").mkdir(parents=True)
+    (fake / "pip" / "__init__.py").write_text("")
+    (fake / "pip" / "__main__.py").write_text(_FAKE_PIP)
+    log.mkdir()
+    _distribution(site, "sgbfake", "1.0")
+    wheel = tmp_path / "sgb_companion-0.1.0-py3-none-any.whl"
+    return _run_install_cell(
+        tmp_path,
+        prelude,
+        [fake, site],
+        SGB_WHEEL=str(wheel),
+        FAKE_PIP_LOG=str(log),
+        FAKE_SITE=str(site),
+        **env,
+    )
+
+
+def test_the_install_cell_constrains_only_the_stack_and_reports_what_pip_changed(tmp_path):
+    done = _run_with_fake_pip(tmp_path, "")
+    assert done.returncode == 0, done.stderr
+    argv = (tmp_path / "log" / "argv.txt").read_text()
+    assert argv.startswith(f"install -q {tmp_path / 'sgb_companion-0.1.0-py3-none-any.whl'} ")
+    constraints = _pins((tmp_path / "log" / "constraints.txt").read_text().splitlines())
+    requirements = _pins((ROOT / "requirements.txt").read_text().splitlines())
+    assert constraints == {_normalise(n): requirements[_normalise(n)] for n in install_cell.STACK}
+    # sgbfake moved, but nothing had imported it: no restart
+    assert "pip changed 1 packages (sgbfake 1.0 -> 2.0)" in done.stdout
+    assert "restart" not in (done.stdout + done.stderr).lower()
+
+
+def test_the_install_cell_shows_a_conflict_report(tmp_path):
+    says = "ERROR: pip's dependency resolver ... the following dependency conflicts."
+    done = _run_with_fake_pip(tmp_path, "", FAKE_PIP_SAYS=says)
+    assert done.returncode == 0, done.stderr
+    assert "pip reports:\n" + says in done.stdout
+
+
+def test_a_changed_imported_package_stops_the_cell_with_a_restart_notice(tmp_path):
+    done = _run_with_fake_pip(tmp_path, "import sgbfake\n")
+    assert done.returncode != 0
+    assert "already imported: sgbfake 1.0 -> 2.0" in done.stderr
+    assert "Restart the kernel and run the notebook again" in done.stderr
+
+
+def test_on_colab_a_changed_imported_package_restarts_the_session(tmp_path):
+    colab = "import sys, types\nsys.modules['google.colab'] = types.ModuleType('google.colab')\n"
+    done = _run_with_fake_pip(tmp_path, colab + "import sgbfake\n")
+    assert done.returncode == -signal.SIGKILL  # what Colab takes as a restart of the session
+    assert "already imported: sgbfake 1.0 -> 2.0" in done.stdout
+    assert "Restarting the session now (what Runtime > Restart session does)" in done.stdout
+
+
+def test_unreadable_pins_raise(tmp_path):
+    missing = tmp_path / "sgb_companion-0.0.0-py3-none-any.whl"
+    done = _run_install_cell(
+        tmp_path, "", SGB_WHEEL=str(missing), SGB_CONSTRAINTS=str(tmp_path / "none.txt")
+    )
+    assert done.returncode != 0
+    assert "cannot read the book's pins from" in done.stderr and "SGB_CONSTRAINTS" in done.stderr
 
 
 def test_a_failed_install_raises(tmp_path):
@@ -105,6 +221,7 @@ def test_a_failed_install_raises(tmp_path):
     done = _run_install_cell(tmp_path, "", SGB_WHEEL=str(missing))
     assert done.returncode != 0
     assert "RuntimeError: installing " + str(missing) + " failed" in done.stderr
+    assert "pip wheel --no-deps ." in done.stderr
 
 
 def test_on_a_gpu_the_install_adds_jax_with_its_cuda_plugin(tmp_path):
@@ -182,8 +299,56 @@ def test_licence_and_citation_agree_with_the_package():
     assert citation["repository-code"] == install_cell.repository()[0]
 
 
-def test_the_bibliography_holds_the_paper_under_its_own_title():
+PAPER_TITLE = (
+    "Stochastic Wiring of Cell Types Enhances Fitness by Generating Phenotypic Variability"
+)
+PAPER_DOI = "10.1101/2024.08.07.606541"
+PAPER_AUTHORS = ["Lachi", "Huang", "Mavor-Parker", "Ghosh", "Richards", "Zador"]
+
+
+def test_the_bibliography_cites_the_paper_with_its_authors_and_doi():
     bib = (ROOT / "references.bib").read_text()
     paper = re.search(r"@misc\{paper,(.*?)\n\}", bib, re.DOTALL).group(1)
-    title = "Stochastic Wiring of Cell Types Enhances Fitness by Generating Phenotypic Variability"
-    assert title in paper
+    assert PAPER_TITLE in paper
+    assert re.search(r"doi = \{(.*?)\}", paper).group(1) == PAPER_DOI
+    authors = re.search(r"author = \{(.*?)\},", paper).group(1).split(" and ")
+    assert [a.split(",")[0] for a in authors] == PAPER_AUTHORS
+
+
+def test_the_citation_file_references_the_paper():
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    (paper,) = [r for r in citation["references"] if r["title"] == PAPER_TITLE]
+    assert paper["doi"] == PAPER_DOI and paper["year"] == 2024
+    assert [a["family-names"] for a in paper["authors"]] == PAPER_AUTHORS
+
+
+def test_the_repository_url_is_named_once_in_the_config_and_nowhere_else_differently():
+    url, ref = install_cell.repository()
+    raw = url.replace("https://github.com/", "https://raw.githubusercontent.com/", 1)
+    readme = (ROOT / "README.md").read_text()
+    named = re.findall(r"https://(?:raw\.githubusercontent|github)\.com/[\w.-]+/[\w.-]+", readme)
+    assert named, "the README names no repository"
+    assert set(named) == {url, raw}, f"the README names another repository: {set(named)}"
+    assert f"git+{url}@{ref}" in readme and f"{raw}/{ref}/requirements.txt" in readme
+    assert yaml.safe_load((ROOT / "CITATION.cff").read_text())["repository-code"] == url
+
+
+def test_the_package_admits_colabs_preinstalled_versions_outside_the_stack():
+    from packaging.requirements import Requirement
+
+    seed = (ROOT / ".ci" / "colab-preinstalled.txt").read_text()
+    source = r"googlecolab/backend-info.*\n# at commit [0-9a-f]{40} \(\d{4}-\d\d-\d\d"
+    assert re.search(source, seed), "the seed file must name its source commit and date"
+    colab = _pins(seed.splitlines())
+    stack = {_normalise(name) for name in install_cell.STACK}
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    kept = []
+    for line in project["dependencies"]:
+        requirement = Requirement(line)
+        name = _normalise(requirement.name)
+        if name in colab and name not in stack:
+            kept.append(name)
+            assert colab[name] in requirement.specifier, (
+                f"pyproject's {requirement} would move Colab's {name} {colab[name]}"
+            )
+    assert {"numpy", "pandas", "scipy", "matplotlib", "scikit-learn"} <= set(kept)

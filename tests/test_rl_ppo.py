@@ -216,6 +216,10 @@ def test_checkpoint_round_trip_and_damaged_checkpoints(tmp_path):
     meta = json.loads(sidecar.read_text())
     meta["config"]["network"]["cell_types"] = 8  # the parameters hold 16 types
     sidecar.write_text(json.dumps(meta))
+    with pytest.raises(ValueError, match=f"{sidecar} does not match the SHA-256 it records"):
+        checkpoints.load(path)
+    meta[checkpoints.SIDECAR_HASH] = checkpoints.sidecar_hash(meta)  # edited with care
+    sidecar.write_text(json.dumps(meta))
     with pytest.raises(ValueError, match=f"{path} does not hold the parameters"):
         checkpoints.load(path)
 

@@ -15,9 +15,14 @@ import yaml
 ROOT = Path(__file__).resolve().parent.parent
 DISTRIBUTION = "sgb-companion"
 
+# Installed at the book's pins (requirements.txt): the JAX, Brax and MuJoCo stack. pip
+# resolves what they need; every other package stays as the runtime has it.
+STACK = ("jax", "jaxlib", "flax", "optax", "brax", "mujoco", "mujoco-mjx")
+
 TEMPLATE = """\
-# On Colab (or with SGB_WHEEL set) install the sgb package of this book's git ref, under
-# the book's pinned versions. Written by tools/install_cell.py from _config.yml.
+# On Colab (or with SGB_WHEEL set) install the sgb package of this book's git ref. Only the
+# JAX, Brax and MuJoCo stack is put at the book's pins; every other package stays as the
+# runtime has it. Written by tools/install_cell.py from _config.yml.
 import os
 import shutil
 import subprocess
@@ -26,18 +31,83 @@ import sys
 REF = "{ref}"
 PACKAGE = "{distribution} @ git+{url}@" + REF
 PINS = "{raw}/" + REF + "/requirements.txt"
+STACK = {stack}
 if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ:
+    import importlib
+    import importlib.metadata as metadata
+    import re
+    import tempfile
+    import time
+    import urllib.request
+
+    def name(text):
+        return re.sub(r"[-_.]+", "-", text).lower()
+
+    def installed():
+        versions = {{}}
+        for dist in metadata.distributions():  # the first on sys.path is the one imported
+            versions.setdefault(name(dist.metadata["Name"]), dist.version)
+        return versions
+
     package = os.environ.get("SGB_WHEEL", PACKAGE)
+    source = os.environ.get("SGB_CONSTRAINTS", PINS)
+    try:
+        if source.startswith(("https://", "http://")):
+            with urllib.request.urlopen(source, timeout=60) as response:
+                text = response.read().decode()
+        else:
+            with open(source) as file:
+                text = file.read()
+    except OSError as error:
+        raise RuntimeError(
+            f"cannot read the book's pins from {{source}} ({{error}}); "
+            "point SGB_CONSTRAINTS at a copy of requirements.txt (see the README)"
+        ) from error
+    pins = [
+        line.split("#")[0].strip()
+        for line in text.splitlines()
+        if "==" in line and name(line.split("==")[0].strip()) in STACK
+    ]
+    constraints = os.path.join(tempfile.mkdtemp(), "stack-pins.txt")
+    with open(constraints, "w") as file:
+        file.write("\\n".join(pins) + "\\n")
     # On a GPU, jax comes with its CUDA plugin at the pinned version (never a CPU-only jaxlib).
     gpu = ["jax[cuda12]"] if shutil.which("nvidia-smi") else []
-    pins = os.environ.get("SGB_CONSTRAINTS", PINS)
-    pip = [sys.executable, "-m", "pip", "install", "-q", package, *gpu, "-c", pins]
+    pip = [sys.executable, "-m", "pip", "install", "-q", package, *gpu, "-c", constraints]
+    before = installed()
     done = subprocess.run(pip, capture_output=True, text=True)
+    report = (done.stdout + done.stderr).strip()
     if done.returncode != 0:
         raise RuntimeError(
             f"installing {{package}} failed (pip exit status {{done.returncode}}) in\\n"
-            f"  {{' '.join(pip)}}\\n" + done.stderr[-3000:]
+            f"  {{' '.join(pip)}}\\n{{report[-4000:]}}\\n(until the book's repository is public, "
+            "build a wheel with `pip wheel --no-deps .` and set SGB_WHEEL: see the README)"
         )
+    if "ERROR" in report or "conflict" in report:
+        print("pip reports:\\n" + report[-4000:])
+    importlib.invalidate_caches()
+    after = installed()
+    moved = {{n: (before[n], v) for n, v in after.items() if n in before and before[n] != v}}
+    added = sorted(n for n in after if n not in before)
+    if moved or added:
+        changes = ", ".join(f"{{n}} {{a}} -> {{b}}" for n, (a, b) in sorted(moved.items()))
+        print(f"pip changed {{len(moved)}} packages ({{changes or 'none'}}), added {{len(added)}}")
+    owners = metadata.packages_distributions()
+    imported = {{module.partition(".")[0] for module in list(sys.modules)}}
+    stale = sorted({{name(d) for m in imported for d in owners.get(m, []) if name(d) in moved}})
+    if stale:
+        changes = ", ".join(f"{{n}} {{moved[n][0]}} -> {{moved[n][1]}}" for n in stale)
+        message = f"pip changed packages this session had already imported: {{changes}}. "
+        if "google.colab" in sys.modules:
+            print(
+                message + "Restarting the session now (what Runtime > Restart session does); "
+                "when it is back, run the notebook again (Runtime > Run all): this cell then "
+                "finds everything installed and goes on.",
+                flush=True,
+            )
+            time.sleep(1)
+            os.kill(os.getpid(), 9)
+        raise RuntimeError(message + "Restart the kernel and run the notebook again.")
 try:
     import sgb  # noqa: F401 (fails here, not a cell later)
 except ImportError as error:
@@ -60,7 +130,14 @@ def cell_source() -> str:
     if not url.startswith("https://github.com/"):
         raise ValueError(f"repository.url must be a GitHub URL, got {url!r}")
     raw = url.replace("https://github.com/", "https://raw.githubusercontent.com/", 1)
-    return TEMPLATE.format(ref=ref, distribution=DISTRIBUTION, url=url, raw=raw).rstrip("\n")
+    return TEMPLATE.format(
+        ref=ref, distribution=DISTRIBUTION, url=url, raw=raw, stack=_tuple(STACK)
+    ).rstrip("\n")
+
+
+def _tuple(names: tuple[str, ...]) -> str:
+    """``names`` as a tuple literal the way ruff formats it."""
+    return "(" + ", ".join(f'"{n}"' for n in names) + ")"
 
 
 def notebooks() -> list[Path]:

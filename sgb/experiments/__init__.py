@@ -2,14 +2,16 @@
 
 Each experiment is registered once, in ``EXPERIMENTS``, by the module that holds
 it, its run function ``run(profile: str, out_dir: Path, **options) -> Path`` (which
-writes a results file with provenance and returns its path) and its profiles
-(a dict profile name -> the config that ``run`` uses at that profile).
+writes a results file with provenance and returns its path), its profiles
+(a dict profile name -> the config that ``run`` uses at that profile), and what
+``python -m sgb reproduce --help`` says of it: the paper figure, the datasets or
+environments, and the cost of each profile.
 """
 
 import importlib
 import os
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -18,11 +20,15 @@ PROFILE_NAMES = ("smoke", "cpu", "paper")
 
 @dataclass(frozen=True)
 class Experiment:
-    """Where an experiment lives: a module under sgb.experiments and two of its names."""
+    """Where an experiment lives (a module under sgb.experiments and two of its names) and
+    what ``--help`` says of it: its paper figure, its inputs and its cost per profile."""
 
     module: str
     run_name: str = "run"
     profiles_name: str = "PROFILES"
+    figure: str = ""  # the paper figure (or the chapter) it reproduces
+    inputs: str = ""  # its datasets or environments, and the option that picks one
+    costs: dict[str, str] = field(default_factory=dict)  # profile -> what a run costs
 
     def _module(self):
         return importlib.import_module(f"sgb.experiments.{self.module}")
@@ -38,15 +44,131 @@ class Experiment:
         return getattr(self._module(), self.profiles_name)
 
 
+# Costs: cpu wall times from the provenance of the committed results (results/*_cpu.json,
+# results/rl/*_cpu.json and the checkpoints' own), on a machine of 2 CPU cores; smoke
+# times are of one `.ci/smoke-keeps-results` run on the same machine while two training
+# runs held its cores (on idle cores they are shorter). "Not measured" is said where no
+# run was ever made.
+_TWO_CORES = "on 2 CPU cores"
+_SHARED = "on 2 CPU cores busy with other runs"
 EXPERIMENTS: dict[str, Experiment] = {
-    "bbb": Experiment("bayes_by_backprop"),
-    "theory": Experiment("theory"),
-    "fig2": Experiment("fig2"),
-    "dgb_budget": Experiment("dgb_budget"),
-    "fig3": Experiment("rl", "run_fig3", "FIG3_PROFILES"),
-    "fig4": Experiment("rl", "run_fig4", "FIG4_PROFILES"),
-    "fig5": Experiment("rl", "run_fig5", "FIG5_PROFILES"),
-    "spread": Experiment("rl_spread"),
+    "bbb": Experiment(
+        "bayes_by_backprop",
+        figure="chapter 2, Bayes by backprop (the method; no paper figure)",
+        inputs="a toy 1-D regression and the digits data (both offline)",
+        costs={
+            "smoke": f"41 s {_SHARED}",
+            "cpu": "not measured (3 seeds, 40 epochs; no committed run)",
+            "paper": "the cpu run (the same config)",
+        },
+    ),
+    "theory": Experiment(
+        "theory",
+        figure="Fig. 6, the Jensen gap on 1-D toy losses, and on trained SGB classifiers",
+        inputs="toy losses and the digits data (offline)",
+        costs={
+            "smoke": f"2 min {_SHARED}",
+            "cpu": f"34 s {_TWO_CORES}",
+            "paper": "not measured (10,000 noise draws per gap, an 81 x 50 start grid)",
+        },
+    ),
+    "fig2": Experiment(
+        "fig2",
+        figure="Fig. 2, innate accuracy of the DGB and the SGB across compression",
+        inputs="--dataset digits or mnist1d (offline, every profile), fashion-mnist or "
+        "mnist (cpu and paper; the Debian package or a download), cifar10 (paper; download)",
+        costs={
+            "smoke": f"39 s (digits) {_SHARED}",
+            "cpu": f"fashion-mnist 22 min {_TWO_CORES}; digits, mnist1d and mnist (the "
+            "fashion-mnist sweep) not measured at the present config; resumable",
+            "paper": "not measured (50 epochs, 5 seeds; cifar10 200 epochs); needs a GPU",
+        },
+    ),
+    "dgb_budget": Experiment(
+        "dgb_budget",
+        figure="chapter 4, beyond Fig. 2: the DGB at the lowest compression trained for "
+        "the authors' budget, and the uncompressed network at the same budget",
+        inputs="fashion-mnist (cpu and paper), digits (smoke)",
+        costs={
+            "smoke": f"16 s {_SHARED}",
+            "cpu": f"51 min {_TWO_CORES}; resumable",
+            "paper": "the cpu run (the same config)",
+        },
+    ),
+    "fig3": Experiment(
+        "rl",
+        "run_fig3",
+        "FIG3_PROFILES",
+        figure="Fig. 3, return against the number of cell types (Brax PPO)",
+        inputs="--env ant (default) or halfcheetah",
+        costs={
+            "smoke": f"3 runs of 4096 steps, 3.5 min {_SHARED}",
+            "cpu": "ant 80 runs, halfcheetah 37 runs, of 2M steps each; an Ant run took "
+            "3 to 8 minutes (the committed checkpoints); resumable, and several processes "
+            "share a sweep",
+            "paper": "55 runs of 50M steps per environment, not measured; needs a GPU",
+        },
+    ),
+    "fig4": Experiment(
+        "rl",
+        "run_fig4",
+        "FIG4_PROFILES",
+        figure="Fig. 4E/F, individuals of one genome on normal and long legs, on two niches",
+        inputs="--env ant (Ant bodies and worlds); evaluates Fig. 3's 64-type seed-0 "
+        "checkpoint (the committed cpu one at smoke and cpu)",
+        costs={
+            "smoke": f"71 s {_SHARED}",
+            "cpu": f"169 s {_TWO_CORES}",
+            "paper": "not measured; needs fig3's paper checkpoint and a GPU",
+        },
+    ),
+    "fig5": Experiment(
+        "rl",
+        "run_fig5",
+        "FIG5_PROFILES",
+        figure="Fig. 5, sampled individuals against the mean network",
+        inputs="--env ant; the same checkpoint as fig4",
+        costs={
+            "smoke": f"75 s {_SHARED}",
+            "cpu": f"279 s {_TWO_CORES}",
+            "paper": "not measured; needs fig3's paper checkpoint and a GPU",
+        },
+    ),
+    "mean_gap": Experiment(
+        "mean_gap",
+        figure="why Fig. 2's SGB individuals beat their mean network: the moment-matched "
+        "mean network beside both",
+        inputs="Fashion-MNIST (digits at smoke); fig2's cells at 10x and 400x, and 10x from "
+        "the authors' rho start",
+        costs={
+            "smoke": f"under a minute {_TWO_CORES}",
+            "cpu": f"9 cells, 408 s {_TWO_CORES} (shared with other runs)",
+            "paper": "the cpu cells at the paper's 50 epochs, not measured",
+        },
+    ),
+    "populations": Experiment(
+        "populations",
+        figure="beyond Fig. 4E and 5: individuals of 6 genomes (ours and the authors', 64 "
+        "types), 32 episodes each, on normal and long legs, against their mean networks",
+        inputs="--env ant; evaluates Fig. 3's 64-type checkpoints, seeds 0 to 2 of both "
+        "settings (the committed cpu ones at smoke and cpu)",
+        costs={
+            "smoke": f"about a minute {_TWO_CORES}",
+            "cpu": "57.6M env-steps, about an hour of one CPU core; resumable",
+            "paper": "not measured; needs fig3's paper checkpoints and a GPU",
+        },
+    ),
+    "spread": Experiment(
+        "rl_spread",
+        figure="beyond Fig. 5: individuals against the mean network across initial spreads",
+        inputs="--env ant",
+        costs={
+            "smoke": f"2 runs of 4096 steps, 2.5 min {_SHARED}",
+            "cpu": f"9 runs of 2M steps (the 3 at the default spread are fig3's), "
+            f"42 min {_TWO_CORES}; resumable",
+            "paper": "15 runs of 50M steps, not measured; needs a GPU",
+        },
+    ),
 }
 
 

@@ -59,6 +59,7 @@ def fit_regression(config: BBBConfig, seed: int = 0, progress: bool = True) -> d
         cell_types=(None,) * (len(widths) + 1),
         prior=GaussianPrior(config.regression_prior_sigma),
         rho_init=-3.0,
+        in_features=x.shape[1],
     )
     params = init_params(model, jax.random.key(seed), x)
     params, history = fit_elbo(

@@ -37,7 +37,7 @@ from sgb.provenance import (
     results_file,
     write_results,
 )
-from sgb.supervised import DenseConfig, dense_accuracy, train_and_evaluate
+from sgb.supervised import DenseConfig, at_chance, dense_accuracy, train_and_evaluate
 
 
 @dataclasses.dataclass(frozen=True)
@@ -87,25 +87,40 @@ def train_with_budget(
     """Yield a record after every chunk of ``config.chunk_rounds`` rounds,
     continuing from ``state_file`` if it holds a state of this run (and saving it there
     after every chunk). A record: ``rounds``, ``best_validation_accuracy``,
-    ``test_accuracy`` (the best network's), ``generated_test_accuracy``, ``fit_mse``."""
+    ``test_accuracy`` (the best network's), ``at_chance`` (whether that is no better than
+    chance, ``sgb.supervised.at_chance``), ``generated_test_accuracy``, ``fit_mse``.
+    A damaged state file, or one whose networks are not finite, is a
+    ``sgb.validation.CorruptFile`` naming it."""
     _, width = sizes_and_width(config, data)
     dgb_config = dataclasses.replace(config.dgb, gnet_width=width, rounds=config.chunk_rounds)
     dgb = dgb_for(dgb_config, data.x_train.shape[1:], data.num_classes)
     run = json.loads(json.dumps({"config": _jsonable(config), "gnet_width": width}))
     state, progress = dgb.init(data.x_train), {"records": []}
     if state_file is not None and state_file.exists():
-        state, progress = resume.load(state_file, state, run)
+        state, progress = resume.load(
+            state_file,
+            state,
+            run,
+            progress_keys=("records",),
+            finite=lambda state: (state.pnet.params, state.gnets, state.best_params),
+        )
     records = progress["records"]
+    if records:
+        print(
+            f"DGB budget: resuming from {state_file} after {int(state.rounds)} rounds", flush=True
+        )
     yield from records
     commit = git_commit()  # the code this process runs, whatever is committed meanwhile
     while int(state.rounds) < config.dgb.rounds:
         start = time.perf_counter()
         _, state, _ = train_dgb(dgb_config, data, progress=False, state=state)
+        test_accuracy = dense_accuracy(dgb.model, state.best_params, data.x_test, data.y_test)
         record = {
             "rounds": int(state.rounds),
             "gnet_width": width,
             "best_validation_accuracy": float(state.best_accuracy),
-            "test_accuracy": dense_accuracy(dgb.model, state.best_params, data.x_test, data.y_test),
+            "test_accuracy": test_accuracy,
+            "at_chance": at_chance(test_accuracy, data.y_test),
             "generated_test_accuracy": _generated_accuracy(dgb, state, data),
             "fit_mse": float(state.fit_mse),
             "wall_time_s": round(time.perf_counter() - start, 2),
@@ -134,7 +149,7 @@ PROFILES: dict[str, BudgetConfig] = {
 def same_budget_dense(config: BudgetConfig, data: Dataset) -> dict:
     """The uncompressed network trained for as many minibatches as the DGB's p-net sees
     (``rounds`` x ``pnet_steps`` of ``batch_size``, rounded to whole epochs): its test
-    accuracy, epochs, wall time and commit."""
+    accuracy (and ``at_chance``), epochs, wall time and commit."""
     steps = config.dgb.rounds * config.dgb.pnet_steps * config.dgb.batch_size
     epochs = max(1, round(steps / len(data.x_train)))
     dense = DenseConfig(
@@ -145,10 +160,11 @@ def same_budget_dense(config: BudgetConfig, data: Dataset) -> dict:
         seed=config.dgb.seed,
     )
     start = time.perf_counter()
-    accuracy = train_and_evaluate(dense, data, progress=False)["accuracy"]
+    out = train_and_evaluate(dense, data, progress=False)
     return {
         "epochs": epochs,
-        "accuracy": accuracy,
+        "accuracy": out["accuracy"],
+        "at_chance": out["at_chance"],
         "wall_time_s": round(time.perf_counter() - start, 2),
         "git_commit": git_commit(),
     }
@@ -165,6 +181,8 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     data = load(config.dataset, seed=0)
     sizes, width = sizes_and_width(config, data)
     chunks = config.dgb.rounds // config.chunk_rounds
+    if progress and len(results.get("records", [])) == chunks:
+        print(f"DGB budget: reusing the finished DGB run in {path}", flush=True)
     if len(results.get("records", [])) < chunks:
         results = {
             "dataset": config.dataset,

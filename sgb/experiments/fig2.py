@@ -11,7 +11,8 @@ already there. ``models`` and ``seeds`` restrict a run to part of the sweep.
 
 Every record carries its compression ratio under both conventions of
 ``sgb.compression`` ("ours" and "authors"); summaries and crossovers are
-computed under each.
+computed under each. ``at_chance`` marks a record whose accuracy is no better than
+chance (``sgb.supervised.at_chance``; absent from records written before it existed).
 
 KL choice (see the book's chapter 4): on MNIST-like data the KL to a N(0, 0.1^2)
 prior is counted per expanded synapse and weighted 1/n_train, the authors'
@@ -133,6 +134,7 @@ def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: SweepConfi
         record["accuracy"] = out["accuracy"]
     if kind == "dgb":
         record |= {"validation_accuracy": out["validation_accuracy"], "fit_mse": out["fit_mse"]}
+    record["at_chance"] = out["at_chance"]
     record["final_loss"] = out["history"][-1]["loss"]
     for convention, key in _RATIO_KEYS.items():
         record[key] = compression(kind, sizes, setting, sweep.in_types, sweep.out_types, convention)
@@ -337,6 +339,13 @@ def run(
         and (seeds is None or cell[2] in seeds)
         and cell not in {(r["model"], r["setting"], r["seed"]) for r in done[group]}
     ]
+    finished = sum(len(records) for records in done.values())
+    if progress and finished:
+        print(
+            f"fig2 {dataset}: reusing the {finished} cells already in {path}; "
+            f"{len(todo)} left to train",
+            flush=True,
+        )
     for group, (kind, setting, seed) in tqdm(todo, desc=f"{dataset}", disable=not progress):
         done[group].append(run_one(kind, setting, seed, data, groups[group]))
         _write(path, dataset, sizes, done, config, profile, sweep)

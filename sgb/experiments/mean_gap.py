@@ -155,7 +155,9 @@ def run_cell(setting: int, rho_init: float, seed: int, data: Dataset, sweep: Swe
     sizes = dense_sizes(data.x_train.shape[1:], (), sweep.hidden, data.num_classes)
     # the params training starts from (sgb.supervised.train_classifier draws them so)
     initial = init_params(
-        make_model(config, data.num_classes), jax.random.key(seed), data.x_train[:1]
+        make_model(config, data.num_classes, data.x_train.shape[1:]),
+        jax.random.key(seed),
+        data.x_train[:1],
     )
     out = train_and_evaluate(config, data, progress=False)
     params = out["params"]

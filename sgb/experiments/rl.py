@@ -277,10 +277,15 @@ def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
     """The record kept in ``checkpoint`` if it holds a run trained with ``ppo`` (``None``
     if there is none, or it was trained with other settings): its learning curve, its
     scores (the last evaluation; the mean of the last two), its speed, wall time and
-    the commit and date it was trained at."""
+    the commit and date it was trained at. A damaged checkpoint counts as none (it is said
+    so), so that the sweep trains the run again."""
     if not checkpoint.exists():
         return None
-    config, _, _, meta = checkpoints.load(checkpoint)
+    try:
+        config, _, _, meta = checkpoints.load(checkpoint)
+    except validation.CorruptFile as error:
+        print(f"{error}: it is trained again", flush=True)
+        return None
     if config != ppo:
         return None
     returns = meta["eval_returns"]

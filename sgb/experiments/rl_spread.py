@@ -12,7 +12,6 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-import jax
 import numpy as np
 
 from sgb.experiments import check_profile
@@ -28,7 +27,7 @@ from sgb.experiments.rl import (
     sweep_config,
     trained_run,
 )
-from sgb.layers import genome_tables
+from sgb.layers import genome_tables, softplus
 from sgb.provenance import provenance, results_file, write_results
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.ppo import PPOConfig
@@ -113,14 +112,14 @@ def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]
         for seed in config.seeds:
             name = checkpoint_name(ppo.env.name, cell_types, seed, profile, rho_init=rho)
             checkpoint = out_dir / CHECKPOINT_DIR / name
-            trained_run(ppo, seed, checkpoint, profile)
+            trained_run(ppo, seed, checkpoint, profile, f"spread rho_init={rho} seed {seed}")
             _, actor, normalizer = load_agent(checkpoint)
             returns = population_on(ppo, actor, normalizer, config.population)
             individuals = returns["normal"]["individuals"].mean(axis=1)
             runs.append(
                 {
                     "rho_init": rho,
-                    "sigma_init": float(jax.nn.softplus(rho)),
+                    "sigma_init": float(softplus(rho)),
                     "seed": seed,
                     "checkpoint": name,
                     "sigma_trained": mean_sigma(actor),

@@ -1,4 +1,5 @@
-"""Chapter 3: the Jensen gap on 1-D toy losses and on a trained SGB digits classifier.
+"""Chapter 3: the Jensen gap on 1-D toy losses and on a trained SGB digits classifier, and
+where the ELBO's spreads settle (on a 1-D toy and on the digits classifiers).
 
 ``compute(config)`` returns every number the chapter shows; ``run`` writes them
 to ``results/theory_cpu.json`` with provenance.
@@ -16,8 +17,9 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from sgb import theory
-from sgb.data import digits
+from sgb.data import Dataset, digits
 from sgb.experiments import check_profile
+from sgb.layers import softplus
 from sgb.provenance import provenance, results_file, write_results
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 
@@ -35,6 +37,13 @@ class TheoryConfig:
     Network: ``classifiers`` (SGB MLPs on digits), Delta L over
     ``network_individuals`` sampled individuals at each spread scale of
     ``sigma_scales``; ``hutchinson_probes`` Rademacher probes next to the exact trace.
+    The ELBO's spread: on the convex toy, ``elbo_steps`` steps of plain gradient
+    descent of ``elbo_learning_rate`` from ``elbo_start`` for each KL weight of
+    ``elbo_kl_weights`` (prior N(0, ``elbo_prior_sigma``^2)), in both parameterisations,
+    kept every ``elbo_record_every`` steps. Every classifier's learned spreads against
+    the fixed point c / (H + c lambda), as trained and once more trained for each of
+    ``settle_epochs``; H at the trained means and averaged over
+    ``population_hessians`` sampled individuals.
     """
 
     steps: int = 100
@@ -59,6 +68,14 @@ class TheoryConfig:
     network_individuals: int = 1000
     sigma_scales: tuple[float, ...] = (0.5, 1.0, 2.0, 4.0, 8.0)
     hutchinson_probes: int = 100
+    elbo_kl_weights: tuple[float, ...] = (0.0, 0.01, 0.05, 0.2)
+    elbo_prior_sigma: float = 1.0
+    elbo_start: tuple[float, float] = (1.5, 0.6)
+    elbo_steps: int = 3000
+    elbo_learning_rate: float = 0.1
+    elbo_record_every: int = 10
+    settle_epochs: tuple[int, ...] = (300,)
+    population_hessians: int = 8
     seed: int = 0
 
 
@@ -75,6 +92,8 @@ PROFILES: dict[str, TheoryConfig] = {
         classifiers=tuple(_smoke_classifier(c) for c in TheoryConfig().classifiers),
         network_individuals=200,
         hutchinson_probes=30,
+        settle_epochs=(100,),
+        population_hessians=2,
     ),
     "cpu": TheoryConfig(),
     "paper": TheoryConfig(
@@ -82,6 +101,8 @@ PROFILES: dict[str, TheoryConfig] = {
         map_mu0=(-1.5, 1.5, 81),
         map_sigma0=(0.02, 0.8, 50),
         network_individuals=5000,
+        settle_epochs=(300, 1000),
+        population_hessians=32,
     ),
 }
 
@@ -150,6 +171,7 @@ def _train_many(
         )
 
     trajectory = run(jnp.asarray(mu0, jnp.float32), jnp.asarray(sigma0, jnp.float32), keys)
+    theory.guard_toy(trajectory)  # vmapped and jitted, train_toy cannot check them itself
     return {k: np.asarray(v) for k, v in trajectory._asdict().items()}
 
 
@@ -207,6 +229,7 @@ def network_gap(config: TheoryConfig, progress: bool = True) -> list[dict[str, A
         key = jax.random.key(config.seed + 300)
         # the prediction is quadratic in sigma: one exact Hessian diagonal, rescaled by scale^2
         diagonal = theory.hessian_diagonal(losses["train_cross_entropy"], view.mean)
+        fixed_point = fixed_point_record(config, classifier, data, trained, diagonal)
         per_layer = {
             name: 0.5 * float(jnp.sum(view.sigma[name] ** 2 * diagonal[name])) for name in diagonal
         }
@@ -255,8 +278,177 @@ def network_gap(config: TheoryConfig, progress: bool = True) -> list[dict[str, A
                 "hutchinson_probes": config.hutchinson_probes,
                 "scales": scales,
                 "layers": layers,
+                "fixed_point": fixed_point,
             }
         )
+    return out
+
+
+def _compact(x) -> np.ndarray:
+    """A flat float64 copy rounded to 6 significant digits, so the results file stays small."""
+    return np.asarray([float(f"{v:.6g}") for v in np.ravel(np.asarray(x, dtype=float))])
+
+
+def fixed_point_summary(sigma2: np.ndarray, predicted: np.ndarray) -> dict[str, float]:
+    """How close learned sigma^2 lies to the predicted c / (H + c lambda), over type pairs.
+
+    ``median_ratio``: median of sigma^2 / predicted; ``ratio_q10``/``ratio_q90``: its
+    10th and 90th percentiles; ``log_correlation``: Pearson correlation of log sigma^2
+    and log predicted; ``within_2x``: fraction of pairs whose ratio lies in [1/2, 2].
+    Pairs without a finite positive prediction are left out (``pairs`` counts the rest).
+    """
+    sigma2, predicted = np.ravel(sigma2), np.ravel(predicted)
+    keep = np.isfinite(predicted) & (predicted > 0)
+    ratio = sigma2[keep] / predicted[keep]
+    log_s, log_p = np.log(sigma2[keep]), np.log(predicted[keep])
+    spread = log_s.std() > 0 and log_p.std() > 0
+    return {
+        "pairs": int(keep.sum()),
+        "median_ratio": float(np.median(ratio)),
+        "ratio_q10": float(np.quantile(ratio, 0.1)),
+        "ratio_q90": float(np.quantile(ratio, 0.9)),
+        "log_correlation": float(np.corrcoef(log_s, log_p)[0, 1]) if spread else float("nan"),
+        "within_2x": float(np.mean((ratio >= 0.5) & (ratio <= 2.0))),
+    }
+
+
+def fixed_point_record(
+    config: TheoryConfig,
+    classifier: ClassifierConfig,
+    data: Dataset,
+    trained: dict[str, Any],
+    diagonal: dict | None = None,
+) -> dict[str, Any]:
+    """A trained classifier's learned spreads per type pair against c / (H + c lambda).
+
+    H: the diagonal of the Hessian of the mean training cross-entropy (nats per example
+    per weight^2, the data term of the ELBO the book trains, whose KL weight is
+    c = kl_scale / n_train), summed over each type pair's synapses and divided by the
+    KL's count of the pair (``theory.genome_fixed_point``); once at the trained means
+    (``diagonal`` when given) and once averaged over ``config.population_hessians``
+    sampled individuals. Per layer, flat arrays over type pairs: ``sigma2``, ``count``,
+    ``curvature`` and ``curvature_population``; the predictions follow from them with
+    ``theory.elbo_fixed_point``. ``summary``: ``fixed_point_summary`` over all pairs.
+    """
+    model, params = trained["model"], trained["params"]
+    view = theory.synapse_view(model, params, data.x_train)
+    loss = theory.network_loss(view, data.x_train, data.y_train, "cross_entropy")
+    if diagonal is None:
+        diagonal = theory.hessian_diagonal(loss, view.mean)
+    population = theory.population_hessian_diagonal(
+        loss,
+        view.mean,
+        view.sigma,
+        jax.random.key(config.seed + 400),
+        config.population_hessians,
+    )
+    kl_weight = classifier.kl_scale / len(data.x_train)
+    prior_sigma = float(classifier.prior.sigma)
+    at_mean = theory.genome_fixed_point(model, params, diagonal, kl_weight)
+    averaged = theory.genome_fixed_point(model, params, population, kl_weight)
+    layers = {
+        name: {
+            "sigma2": _compact(at_mean[name].sigma2),
+            "count": np.ravel(np.asarray(at_mean[name].count, dtype=int)),
+            "curvature": _compact(at_mean[name].curvature),
+            "curvature_population": _compact(averaged[name].curvature),
+        }
+        for name in at_mean
+    }
+    gather = lambda fps, field: np.concatenate(  # noqa: E731
+        [np.ravel(getattr(fp, field)) for fp in fps.values()]
+    )
+    return {
+        "epochs": classifier.epochs,
+        "kl_weight": kl_weight,
+        "prior_sigma": prior_sigma,
+        "sigma2_init": float(softplus(classifier.rho_init)) ** 2,
+        "population_hessians": config.population_hessians,
+        "accuracy": {
+            "mean_network": trained["accuracy"]["mean_network"],
+            "population_average": trained["accuracy"]["population_average"],
+        },
+        "layers": layers,
+        "summary": {
+            "at_mean": fixed_point_summary(gather(at_mean, "sigma2"), gather(at_mean, "predicted")),
+            "population": fixed_point_summary(
+                gather(averaged, "sigma2"), gather(averaged, "predicted")
+            ),
+        },
+    }
+
+
+def fixed_points(
+    config: TheoryConfig, network: list[dict[str, Any]], progress: bool = True
+) -> list[dict[str, Any]]:
+    """Per classifier, its spreads against the fixed point: as trained for the chapter
+    (the record ``network_gap`` kept, moved out of ``network``) and trained again for
+    each of ``settle_epochs``."""
+    data = digits(config.seed)
+    out = []
+    for classifier, net in zip(config.classifiers, network, strict=True):
+        runs = [net.pop("fixed_point")]
+        for epochs in tqdm(config.settle_epochs, desc="settling", disable=not progress):
+            longer = dataclasses.replace(classifier, epochs=epochs)
+            trained = train_and_evaluate(longer, data, progress=False)
+            runs.append(fixed_point_record(config, longer, data, trained))
+        out.append({"cell_types": classifier.cell_types, "runs": runs})
+    return out
+
+
+def elbo_toy(config: TheoryConfig) -> dict[str, Any]:
+    """The ELBO's sigma on the convex toy L = w^2/2 (H = 1) for every KL weight, in both
+    parameterisations, against sigma* = sqrt(c / (1 + c / sigma_p^2)).
+
+    ``runs[parameterisation]``: ``mu`` and ``sigma`` (kl weights, recorded steps), every
+    ``elbo_record_every`` steps; ``settled_mean``/``settled_sd``: sigma over the last
+    quarter of the steps (every step), per KL weight.
+    """
+    kl_weights = np.asarray(config.elbo_kl_weights, dtype=np.float32)
+    mu0, sigma0 = config.elbo_start
+    predicted = np.sqrt(
+        np.asarray(theory.elbo_fixed_point(1.0, kl_weights, config.elbo_prior_sigma))
+    )
+    out = {
+        "kl_weights": kl_weights,
+        "prior_sigma": config.elbo_prior_sigma,
+        "curvature": 1.0,
+        "mu0": mu0,
+        "sigma0": sigma0,
+        "learning_rate": config.elbo_learning_rate,
+        "steps": np.arange(0, config.elbo_steps + 1, config.elbo_record_every),
+        "predicted_sigma": predicted,
+        "runs": {},
+    }
+    tail = config.elbo_steps // 4
+    for i, parameterisation in enumerate(theory.PARAMETERISATIONS):
+
+        @jax.jit
+        @jax.vmap
+        def run(c, k, parameterisation=parameterisation):
+            return theory.train_elbo_toy(
+                theory.convex_loss,
+                mu0,
+                sigma0,
+                k,
+                c,
+                config.elbo_prior_sigma,
+                steps=config.elbo_steps,
+                learning_rate=config.elbo_learning_rate,
+                num_samples=config.train_samples,
+                parameterisation=parameterisation,
+            )
+
+        keys = jax.random.split(jax.random.key(config.seed + 500 + i), kl_weights.size)
+        trajectory = run(jnp.asarray(kl_weights), keys)
+        sigma = np.asarray(trajectory.sigma)
+        every = config.elbo_record_every
+        out["runs"][parameterisation] = {
+            "mu": np.asarray(trajectory.mu)[:, ::every],
+            "sigma": sigma[:, ::every],
+            "settled_mean": sigma[:, -tail:].mean(axis=1),
+            "settled_sd": sigma[:, -tail:].std(axis=1),
+        }
     return out
 
 
@@ -265,6 +457,8 @@ def compute(config: TheoryConfig, progress: bool = True) -> dict[str, Any]:
     results = toy_runs(config)
     results["breakdown"] = breakdown(config)
     results["network"] = network_gap(config, progress)
+    results["fixed_point"] = fixed_points(config, results["network"], progress)
+    results["elbo_toy"] = elbo_toy(config)
     return results
 
 
@@ -315,3 +509,33 @@ def network_summary(results: dict[str, Any]) -> tuple[list[dict], list[dict]]:
                 }
             )
     return overall, layers
+
+
+def fixed_point_rows(fixed_points: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Rows for the chapter's table of ``fixed_points`` output (from ``compute`` or a results
+    file): per classifier and training length, accuracy and how close the learned sigma^2
+    lies to c / (H + c lambda), with H at the trained means and averaged over individuals."""
+    rows = []
+    for net in fixed_points:
+        types = "/".join("n" if k is None else str(k) for k in net["cell_types"])
+        for run in net["runs"]:
+            sigma2 = np.concatenate([np.asarray(x["sigma2"]) for x in run["layers"].values()])
+            at_mean, population = run["summary"]["at_mean"], run["summary"]["population"]
+            rows.append(
+                {
+                    "cell types": types,
+                    "epochs": run["epochs"],
+                    "mean-network test accuracy": run["accuracy"]["mean_network"],
+                    "individuals' test accuracy": run["accuracy"]["population_average"],
+                    "median learned sigma": float(np.median(np.sqrt(sigma2))),
+                    "median sigma^2 / predicted (H at mu)": at_mean["median_ratio"],
+                    "10-90 % range": f"{at_mean['ratio_q10']:.2f}-{at_mean['ratio_q90']:.2f}",
+                    "log correlation (H at mu)": at_mean["log_correlation"],
+                    "median sigma^2 / predicted (H over individuals)": population["median_ratio"],
+                    "10-90 % range ": (
+                        f"{population['ratio_q10']:.2f}-{population['ratio_q90']:.2f}"
+                    ),
+                    "log correlation (H over individuals)": population["log_correlation"],
+                }
+            )
+    return rows

@@ -188,3 +188,91 @@ def network_gap(results: dict[str, Any]):
         ax.minorticks_off()
         ax.legend(fontsize=7)
     return fig
+
+
+def elbo_toy(results: dict[str, Any]):
+    """The ELBO's spread on the convex toy L = w^2/2: sigma over gradient steps for each KL
+    weight c, trained as sigma = softplus(rho) (solid) and as sigma itself (thin), against
+    the fixed point sqrt(c / (H + c lambda)) (dotted)."""
+    toy = results["elbo_toy"]
+    steps = _a(toy["steps"])
+    kl_weights = _a(toy["kl_weights"])
+    predicted = _a(toy["predicted_sigma"])
+    fig, ax = subplots(figsize=(8, 4.2))
+    colors = ("k", PALETTE["sgb"], PALETTE["individuals"], PALETTE["dgb"], PALETTE["authors"])
+    floor = 1e-3
+    for i, (c, color) in enumerate(zip(kl_weights, colors, strict=False)):
+        soft = _a(toy["runs"]["softplus"]["sigma"])[i]
+        raw = _a(toy["runs"]["sigma"]["sigma"])[i]
+        ax.plot(steps, np.maximum(soft, floor), color=color, lw=1.8, label=f"c = {c:g}")
+        ax.plot(steps, np.maximum(raw, floor), color=color, lw=0.7, alpha=0.7)
+        if predicted[i] > 0:
+            ax.axhline(predicted[i], color=color, ls=":", lw=1.5)
+    ax.plot([], [], color="grey", lw=1.8, label="trained as softplus(rho)")
+    ax.plot([], [], color="grey", lw=0.7, label="trained as sigma")
+    ax.plot([], [], color="grey", ls=":", label="sqrt(c / (H + c lambda))")
+    ax.set(
+        yscale="log",
+        ylim=(floor, 1.0),
+        xlabel="gradient step",
+        ylabel="spread sigma",
+        title=(
+            f"L(w) = w^2/2 (H = 1), prior N(0, {toy['prior_sigma']:g}^2), "
+            f"learning rate {toy['learning_rate']:g}"
+        ),
+    )
+    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    return fig
+
+
+def _fixed_point_points(run: dict[str, Any], field: str) -> tuple[np.ndarray, np.ndarray]:
+    """Learned sigma^2 and the predicted c / (H + c lambda) over a run's type pairs."""
+    sigma2 = np.concatenate([_a(layer["sigma2"]) for layer in run["layers"].values()])
+    curvature = np.concatenate([_a(layer[field]) for layer in run["layers"].values()])
+    predicted = np.asarray(theory.elbo_fixed_point(curvature, run["kl_weight"], run["prior_sigma"]))
+    return sigma2, predicted
+
+
+def fixed_point(fixed_points: list[dict[str, Any]]):
+    """Each digits classifier's learned sigma^2 per type pair against c / (H + c lambda):
+    top, H at the trained means; bottom, H averaged over sampled individuals. One colour
+    per training length; the dashed line is equality, the dotted one sigma^2 at
+    initialisation."""
+    fig, axes = subplots(2, len(fixed_points), figsize=(5.5 * len(fixed_points), 8), squeeze=False)
+    colors = (PALETTE["baseline"], PALETTE["sgb"], PALETTE["dgb"], PALETTE["individuals"])
+    for col, net in enumerate(fixed_points):
+        for row, (field, where) in enumerate(
+            (
+                ("curvature", "H at the trained means"),
+                ("curvature_population", "H over individuals"),
+            )
+        ):
+            ax = axes[row, col]
+            for run, color in zip(net["runs"], colors, strict=False):
+                sigma2, predicted = _fixed_point_points(run, field)
+                summary = run["summary"]["at_mean" if row == 0 else "population"]
+                ax.scatter(
+                    predicted,
+                    sigma2,
+                    s=6,
+                    alpha=0.5,
+                    color=color,
+                    label=(
+                        f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f}, "
+                        f"log corr. {summary['log_correlation']:.2f}"
+                    ),
+                )
+            first = net["runs"][0]
+            ax.axhline(first["sigma2_init"], color="grey", ls=":", lw=1, label="sigma^2 at init")
+            lo, hi = ax.get_xlim()
+            ends = np.array([min(lo, first["sigma2_init"]), hi])
+            ax.plot(ends, ends, "k--", lw=1, label="learned = predicted")
+            ax.set(
+                xscale="log",
+                yscale="log",
+                xlabel="predicted c / (H + c lambda)  (weight^2)",
+                ylabel="learned sigma^2  (weight^2)",
+                title=f"types {types_label(net['cell_types'])}, {where}",
+            )
+            ax.legend(fontsize=7, loc="upper left")
+    return fig

@@ -1,14 +1,24 @@
 """Checkpoints of trained agents: flax msgpack for the arrays, JSON for the configuration.
 
 ``save(path, result)`` writes ``path`` (msgpack: actor and critic parameters,
-observation statistics) and ``path.with_suffix(".json")`` (the PPO config,
-the learning curve, the provenance passed in and the SHA-256 of the msgpack file),
-each atomically. ``load`` checks the checksum and that the parameter shapes are those
-the config describes, and names the file in every error.
+observation statistics) and ``path.with_suffix(".json")`` (the sidecar: the PPO config,
+the learning curve, the speed and wall time, the provenance passed in, the SHA-256 of the
+msgpack file and ``sidecar_sha256``, the SHA-256 of the canonical JSON of every other
+sidecar field), each atomically. It removes an old msgpack at ``path`` first and writes
+the sidecar before the msgpack, so whatever instant a crash hits, a msgpack only ever
+sits beside its own sidecar: a run killed while saving has no checkpoint and is trained
+(or resumed from its training state) again.
+
+``load`` checks both hashes, that the sidecar fields read back have their types, that
+the parameter shapes are those the config describes and that every array is finite,
+and names the file in every error (a ``sgb.validation.CorruptFile``, a ``ValueError``).
+A sidecar without ``sidecar_sha256`` is one of the earlier format, written before the
+sidecar was hashed: it still loads, its fields checked for their types only.
 """
 
 import hashlib
 import json
+import numbers
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -22,6 +32,9 @@ from sgb.rl.envs import EnvSpec
 from sgb.rl.networks import NetworkConfig
 from sgb.rl.normalizer import Normalizer
 from sgb.rl.ppo import Params, PPOConfig, TrainResult, init_params
+from sgb.validation import RETRAIN, CorruptFile, finite_tree
+
+SIDECAR_HASH = "sidecar_sha256"
 
 
 def _config_dict(config: PPOConfig) -> dict[str, Any]:
@@ -45,6 +58,14 @@ def config_from_dict(data: dict[str, Any]) -> PPOConfig:
     return PPOConfig(env=EnvSpec(**data.pop("env")), network=NetworkConfig(**net), **data)
 
 
+def sidecar_hash(meta: dict[str, Any]) -> str:
+    """SHA-256 of the canonical JSON (sorted keys, no spaces) of every field of the sidecar
+    ``meta`` but ``sidecar_sha256`` itself."""
+    fields = {k: v for k, v in meta.items() if k != SIDECAR_HASH}
+    text = json.dumps(fields, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def save(path: str | Path, result: TrainResult, record: dict[str, Any] | None = None) -> Path:
     """Write the checkpoint of ``result`` to ``path`` (.msgpack) and its JSON sidecar."""
     path = Path(path)
@@ -65,8 +86,11 @@ def save(path: str | Path, result: TrainResult, record: dict[str, Any] | None = 
         "provenance": record or {},
         "sha256": hashlib.sha256(data).hexdigest(),
     }
-    atomic_write(path, data)
+    meta = json.loads(json.dumps(meta))  # the fields as ``load`` will read them back
+    meta[SIDECAR_HASH] = sidecar_hash(meta)
+    path.unlink(missing_ok=True)  # never an old msgpack beside the new sidecar
     atomic_write(path.with_suffix(".json"), (json.dumps(meta, indent=1) + "\n").encode())
+    atomic_write(path, data)
     return path
 
 
@@ -77,28 +101,72 @@ def load(path: str | Path) -> tuple[PPOConfig, Params, Normalizer, dict[str, Any
     for file in (path, sidecar):
         if not file.exists():
             raise ValueError(f"checkpoint file {file} does not exist")
+        if not file.is_file():
+            raise CorruptFile(file, "is not a file", RETRAIN, "checkpoint")
     data = path.read_bytes()
     try:
-        meta = json.loads(sidecar.read_text())
+        meta = json.loads(sidecar.read_bytes().decode())
+        if not isinstance(meta, dict):
+            raise TypeError(f"it holds a {type(meta).__name__}, not an object")
         expected, config = meta["sha256"], config_from_dict(meta["config"])
     except (ValueError, KeyError, TypeError) as error:
-        raise ValueError(f"checkpoint sidecar {sidecar} is unreadable: {error!r}") from error
+        raise CorruptFile(sidecar, f"is unreadable ({error!r})", RETRAIN, "checkpoint") from error
+    if SIDECAR_HASH in meta and meta[SIDECAR_HASH] != sidecar_hash(meta):
+        raise CorruptFile(
+            sidecar, "does not match the SHA-256 it records of itself", RETRAIN, "checkpoint"
+        )
+    _check_fields(sidecar, meta)
     if hashlib.sha256(data).hexdigest() != expected:
-        raise ValueError(f"checkpoint {path} does not match the SHA-256 recorded in {sidecar}")
+        raise CorruptFile(
+            path, f"does not match the SHA-256 recorded in {sidecar}", RETRAIN, "checkpoint"
+        )
     try:
         state = serialization.msgpack_restore(data)
         params = Params(state["actor"], state["critic"])
         normalizer = Normalizer(**state["normalizer"])
     except (ValueError, KeyError, TypeError) as error:
-        raise ValueError(f"checkpoint {path} is unreadable: {error!r}") from error
+        raise CorruptFile(path, f"is unreadable ({error!r})", RETRAIN, "checkpoint") from error
     # the shapes the config describes, traced without computing (or compiling) anything
     _check_shapes(path, params, jax.eval_shape(partial(init_params, config, seed=0)))
+    arrays = {"actor": params.actor, "critic": params.critic, "normalizer": state["normalizer"]}
+    try:
+        finite_tree("", arrays)
+    except ValueError as error:
+        problem = f"has arrays that are not finite: {error}"
+        raise CorruptFile(path, problem, RETRAIN, "checkpoint") from error
     params, normalizer = jax.tree_util.tree_map(jax.numpy.asarray, (params, normalizer))
     return config, params, normalizer, meta
 
 
+def _check_fields(sidecar: Path, meta: dict[str, Any]) -> None:
+    """Raise ``CorruptFile`` naming ``sidecar`` unless the fields read back from it have
+    their types: a learning curve of as many integer steps as finite returns, a speed and
+    a wall time >= 0, a provenance object."""
+
+    def number(value: Any) -> bool:
+        return isinstance(value, numbers.Real) and not isinstance(value, bool)
+
+    steps, returns = meta.get("eval_steps"), meta.get("eval_returns")
+    problems = []
+    if not isinstance(steps, list) or not all(isinstance(s, int) for s in steps):
+        problems.append("eval_steps is not a list of integers")
+    if not isinstance(returns, list) or not returns:
+        problems.append("eval_returns is not a non-empty list")
+    elif not all(number(r) and np.isfinite(r) for r in returns):
+        problems.append("eval_returns holds a value that is not a finite number")
+    elif isinstance(steps, list) and len(steps) != len(returns):
+        problems.append("eval_steps and eval_returns differ in length")
+    for key in ("train_steps_per_s", "wall_time_s"):
+        if not (number(meta.get(key)) and meta[key] >= 0):
+            problems.append(f"{key} is not a number >= 0")
+    if not isinstance(meta.get("provenance", {}), dict):
+        problems.append("provenance is not an object")
+    if problems:
+        raise CorruptFile(sidecar, f"is damaged: {'; '.join(problems)}", RETRAIN, "checkpoint")
+
+
 def _check_shapes(path: Path, params: Params, expected: Params) -> None:
-    """Raise ``ValueError`` naming ``path`` unless ``params`` has the shapes of ``expected``."""
+    """Raise ``CorruptFile`` naming ``path`` unless ``params`` has the shapes of ``expected``."""
 
     def shapes(tree: Any) -> dict[str, tuple[int, ...]]:
         leaves = jax.tree_util.tree_leaves_with_path(tree)
@@ -107,7 +175,10 @@ def _check_shapes(path: Path, params: Params, expected: Params) -> None:
     got, want = shapes(params), shapes(expected)
     if got != want:
         diff = sorted(set(got.items()) ^ set(want.items()))[:4]
-        raise ValueError(
-            f"checkpoint {path} does not hold the parameters its sidecar's config describes "
-            f"(first differences, (name, shape): {diff})"
+        raise CorruptFile(
+            path,
+            "does not hold the parameters its sidecar's config describes "
+            f"(first differences, (name, shape): {diff})",
+            RETRAIN,
+            "checkpoint",
         )

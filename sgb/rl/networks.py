@@ -26,7 +26,14 @@ import jax.numpy as jnp
 
 from sgb import validation
 from sgb.celltypes import expand_table
-from sgb.layers import SGBDense, genome_kl, individual_kernel, individual_matmul
+from sgb.layers import (
+    SGBDense,
+    _check_input,
+    genome_kl,
+    individual_kernel,
+    individual_matmul,
+    softplus,
+)
 from sgb.priors import GaussianPrior, Prior, ScaleMixturePrior
 
 Phenotype = list[tuple[jnp.ndarray, jnp.ndarray]]
@@ -78,7 +85,8 @@ class NetworkConfig:
 
 class MLP(nn.Module):
     """``in_features`` -> hidden layers (SGB or dense) -> ``out`` units (dense, or SGB
-    with ``sgb_output``). Layers are named ``hidden_0``, ``hidden_1``, ... and ``out``."""
+    with ``sgb_output``). Layers are named ``hidden_0``, ``hidden_1``, ... and ``out``.
+    An input of another width than ``in_features`` is a ``ValueError``."""
 
     config: NetworkConfig
     out: int
@@ -87,6 +95,7 @@ class MLP(nn.Module):
     @nn.compact
     def __call__(self, x: jnp.ndarray, mean_network: bool = False) -> jnp.ndarray:
         cfg = self.config
+        _check_input(x, self.in_features)
         sgb = sgb_layers(self)
         widths = (*cfg.hidden, self.out)
         for i, (name, width) in enumerate(zip(layer_names(cfg), widths, strict=True)):
@@ -100,6 +109,7 @@ class MLP(nn.Module):
                     prior=_prior(cfg),
                     mean_init_std=1.0 if cfg.mean_init is None else cfg.mean_init * n_in**0.5,
                     rho_init=cfg.rho_init,
+                    in_features=(self.in_features, *cfg.hidden)[i],
                     name=name,
                 )
                 x = layer(x, mean_network)
@@ -180,7 +190,7 @@ def network_kl(model: MLP, params: dict, key: jax.Array) -> jnp.ndarray:
     keys = jax.random.split(key, len(shapes))
     genomes = [params["params"][name]["genome"] for name in shapes]
     return sum(
-        genome_kl(prior, g["mu"], jax.nn.softplus(g["rho"]), shape, "synapse", k)
+        genome_kl(prior, g["mu"], softplus(g["rho"]), shape, "synapse", k)
         for g, shape, k in zip(genomes, shapes.values(), keys, strict=True)
     )
 
@@ -210,7 +220,10 @@ def forward(layers: Phenotype, x: jnp.ndarray) -> jnp.ndarray:
 
 
 def action_distribution(logits: jnp.ndarray) -> tuple[jnp.ndarray, jnp.ndarray]:
-    """Split actor outputs (..., 2 * act) into Gaussian loc and scale (softplus + 1e-3)."""
+    """Split actor outputs (..., 2 * act) into Gaussian loc and scale (softplus + 1e-3).
+
+    Not a spread: ``jax.nn.softplus``, exact over the whole float32 range (the spreads'
+    ``sgb.layers.softplus`` saturates above 88)."""
     loc, raw = jnp.split(logits, 2, axis=-1)
     return loc, jax.nn.softplus(raw) + MIN_STD
 

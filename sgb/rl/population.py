@@ -15,6 +15,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from sgb import validation
 from sgb.noise import standard_normal
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
@@ -73,11 +74,38 @@ def compiled_network(network: NetworkConfig) -> NetworkConfig:
     return replace(network, rho_init=NetworkConfig.rho_init, mean_init=NetworkConfig.mean_init)
 
 
+def check_normalizer(normalizer: Normalizer, size: int) -> Normalizer:
+    """``normalizer`` if it holds finite statistics of observations of ``size`` entries (a
+    count >= 0, a mean and squared deviations >= 0 of shape (size,)); else a ``ValueError``
+    (``TypeError`` for another type) naming what is wrong."""
+    validation.instance("normalizer", normalizer, Normalizer)
+    validation.finite_tree("normalizer", normalizer._asdict())
+    count = validation.array("normalizer.count", normalizer.count, ndim=0)
+    for name in ("mean", "m2"):
+        field = validation.array(f"normalizer.{name}", getattr(normalizer, name), ndim=1)
+        if field.shape != (size,):
+            raise ValueError(
+                f"normalizer.{name} must have shape ({size},) for observations of {size} "
+                f"entries, got {tuple(field.shape)}"
+            )
+    if not validation.is_traced(count) and (
+        float(count) < 0 or bool(np.any(np.asarray(normalizer.m2) < 0))
+    ):
+        raise ValueError("normalizer.count and normalizer.m2 must be >= 0")
+    return normalizer
+
+
+def check_actor_params(actor_params: dict) -> dict:
+    """``actor_params`` if it is a ``{"params": ...}`` tree with finite leaves."""
+    if not isinstance(actor_params, dict) or "params" not in actor_params:
+        raise TypeError(f"actor_params must be a dict {{'params': ...}}, got {actor_params!r}")
+    return validation.finite_tree("actor_params", actor_params)
+
+
 def _keys(n_individuals: int, episodes: int, seed: int) -> tuple[jax.Array, jax.Array]:
-    if n_individuals < 1 or episodes < 1:
-        raise ValueError(
-            f"n_individuals and episodes must be positive, got {n_individuals}, {episodes}"
-        )
+    validation.integer("n_individuals", n_individuals)
+    validation.integer("episodes", episodes)
+    validation.seed("seed", seed)
     ind_key, env_key = jax.random.split(jax.random.PRNGKey(seed))
     reset_keys = jax.random.split(env_key, n_individuals * episodes)
     return jax.random.split(ind_key, n_individuals), reset_keys.reshape(n_individuals, episodes, -1)
@@ -104,9 +132,17 @@ def population_returns(
     ``mean_network=True`` the mean network plays the very same initial
     states, row by row (for paired comparisons). With ``stochastic=True`` actions are
     sampled from the policy (noise from ``fold_in(PRNGKey(seed), 1)``).
+
+    The arguments are checked first: counts and ``seed`` integers, ``actor_params`` finite,
+    ``normalizer`` finite statistics of the environment's observations.
     """
-    if episode_length < 1:
-        raise ValueError(f"episode_length must be positive, got {episode_length}")
+    validation.instance("spec", spec, EnvSpec)
+    validation.instance("network", network, NetworkConfig)
+    validation.integer("episode_length", episode_length)
+    validation.instance("mean_network", mean_network, bool)
+    validation.instance("stochastic", stochastic, bool)
+    check_actor_params(actor_params)
+    check_normalizer(normalizer, make_env(spec).observation_size)
     ind_keys, reset_keys = _keys(n_individuals, episodes, seed)
     total = _returns(
         spec,

@@ -42,7 +42,7 @@ import optax
 from tqdm.auto import tqdm
 
 from sgb import resume, validation
-from sgb.divergence import check_loss, check_params
+from sgb.divergence import Guard, likely_cause
 from sgb.noise import standard_normal
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.networks import (
@@ -302,14 +302,16 @@ def _init_params(config: PPOConfig, key_actor: jax.Array, key_critic: jax.Array)
 
 def init_params(config: PPOConfig, seed: int) -> Params:
     """Initial actor and critic parameters for ``seed``, as ``init_state`` makes them."""
-    _, ka, kc, _, _ = jax.random.split(jax.random.PRNGKey(seed), 5)
+    validation.instance("config", config, PPOConfig)
+    _, ka, kc, _, _ = jax.random.split(jax.random.PRNGKey(validation.seed("seed", seed)), 5)
     return _init_params(config, ka, kc)
 
 
 def init_state(config: PPOConfig, seed: int) -> TrainState:
     """Initial parameters, optimizer, environments and individuals for ``seed``."""
+    validation.instance("config", config, PPOConfig)
     env, actor, critic = _models(config)
-    key = jax.random.PRNGKey(seed)
+    key = jax.random.PRNGKey(validation.seed("seed", seed))
     key, ka, kc, kr, ki = jax.random.split(key, 5)
     params = _init_params(config, ka, kc)
     env_state = jax.jit(jax.vmap(env.reset))(jax.random.split(kr, config.num_envs))
@@ -432,13 +434,28 @@ def train_iterations(ts: TrainState, config: PPOConfig, n: int):
     return ts, metrics
 
 
-def _check_divergence(metrics: dict, params: Params, done: int, config: PPOConfig) -> None:
+def _check_divergence(
+    guard: Guard, metrics: dict, params: Params, done: int, config: PPOConfig
+) -> None:
     """Raise ``TrainingDiverged`` naming the first iteration (after ``done`` earlier ones)
-    whose loss is not finite, or the first non-finite parameter."""
+    whose loss is not finite or blew up (``guard``), or the first non-finite parameter."""
     losses = np.asarray(metrics["total"])
-    for i, loss in enumerate(losses):
-        check_loss(float(loss), (done + i + 1) * config.steps_per_iteration, "PPO loss")
-    check_params(params, (done + len(losses)) * config.steps_per_iteration)
+    step = config.steps_per_iteration
+    guard.losses(losses, (done + 1) * step, step)
+    guard.params(params, (done + len(losses)) * step)
+
+
+def _guard(holder: dict) -> Guard:
+    """The divergence guard of a PPO run whose current state is ``holder["ts"]``: its
+    likely causes are observations holding nan or inf, rho overflow, or the learning rate."""
+
+    def cause() -> str:
+        ts = holder["ts"]
+        stats = {"the observations' running mean": ts.normalizer.mean}
+        stats["their running squared deviations"] = ts.normalizer.m2
+        return likely_cause(data=stats, params=ts.params)
+
+    return Guard("PPO loss", cause=cause)
 
 
 def _strong(x: jnp.ndarray) -> jnp.ndarray:
@@ -448,6 +465,8 @@ def _strong(x: jnp.ndarray) -> jnp.ndarray:
 
 def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: int) -> float:
     """Mean innate return of ``eval_individuals`` individuals, one full episode each."""
+    validation.instance("config", config, PPOConfig)
+    validation.instance("params", params, Params)
     returns = population_returns(
         config.env,
         config.network,
@@ -480,7 +499,11 @@ def train(
     (``sgb.resume``), and a call that finds the file continues from it: killed and
     started again, the run ends with the result of an uninterrupted one. The file is
     left in place (a finished one makes the call return at once); the caller removes it
-    once the result is kept. ``label`` names the run on its progress bar.
+    once the result is kept. A state file that is damaged, or holds parameters that are
+    not finite, is a ``sgb.validation.CorruptFile`` naming it. ``label`` names the run on
+    its progress bar. Training stops (``sgb.divergence.TrainingDiverged``) when the loss
+    is not finite or its magnitude exceeds ``sgb.divergence.BLOWUP_FACTOR`` times that of
+    the first one of this call.
     """
     start = time.perf_counter()
     ts = init_state(config, seed)
@@ -494,7 +517,15 @@ def train(
         "wall_time_s": 0.0,
     }
     if state_file is not None and Path(state_file).exists():
-        ts, done = resume.load(state_file, ts, run)
+        ts, done = resume.load(
+            state_file,
+            ts,
+            run,
+            progress_keys=tuple(done),
+            finite=lambda ts: (ts.params, ts.normalizer),
+        )
+    holder = {"ts": ts}
+    guard = _guard(holder)
     chunk = max(1, config.iterations // config.num_evals)
     first = done["chunks"]
     step_config = compiled_config(config)
@@ -507,7 +538,8 @@ def train(
     ):
         t0 = time.perf_counter()
         ts, metrics = train_iterations(ts, step_config, chunk)
-        _check_divergence(metrics, ts.params, i * chunk, config)
+        holder["ts"] = ts
+        _check_divergence(guard, metrics, ts.params, i * chunk, config)
         if i > first or config.num_evals - first == 1:
             done["timed_s"] += time.perf_counter() - t0
             done["timed_steps"] += chunk * config.steps_per_iteration

@@ -1,0 +1,126 @@
+"""``python -m sgb reproduce``: where results go, the committed results kept out of reach
+without the maintainer flag, what a rerun keeps, and a ``--help`` that describes every
+experiment."""
+
+import json
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+from sgb.__main__ import MAINTAINER_FLAG, build_parser, experiments_help, main
+from sgb.experiments import EXPERIMENTS, PROFILE_NAMES, fig2
+from sgb.paths import committed_results
+from sgb.provenance import write_results
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _committed_state() -> dict[str, tuple[int, int]]:
+    """Size and modification time of every committed results file a supervised experiment
+    could write (results/ outside rl/), and the names of any smoke files anywhere under it.
+    (rl/ is left out of the first: a maintainer's sweep may be writing it meanwhile.)"""
+    root = committed_results()
+    state = {}
+    for path in root.rglob("*"):
+        name = path.relative_to(root).as_posix()
+        if path.is_file() and (not name.startswith("rl/") or "_smoke" in path.name):
+            state[name] = (path.stat().st_size, path.stat().st_mtime_ns)
+    return state
+
+
+@pytest.mark.parametrize("inside", ["", "rl"])
+def test_the_committed_results_are_refused_without_the_maintainer_flag(inside, capsys):
+    before = _committed_state()
+    out_dir = committed_results() / inside
+    assert main(["reproduce", "bbb", "--out-dir", str(out_dir)]) == 2
+    error = capsys.readouterr().err
+    assert "the committed results" in error and MAINTAINER_FLAG in error
+    assert _committed_state() == before
+
+
+def test_sgb_results_naming_the_committed_results_is_refused_too(monkeypatch, capsys):
+    monkeypatch.setenv("SGB_RESULTS", str(committed_results()))
+    assert main(["reproduce", "bbb"]) == 2
+    assert MAINTAINER_FLAG in capsys.readouterr().err
+
+
+def test_the_maintainer_flag_writes_only_into_the_committed_results(tmp_path, capsys):
+    assert main(["reproduce", "bbb", MAINTAINER_FLAG, "--out-dir", str(tmp_path)]) == 2
+    assert "takes no other --out-dir" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_smoke_reproduce_writes_to_sgb_results_and_leaves_the_committed_results(
+    tmp_path, monkeypatch, capsys
+):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("SGB_RESULTS", raising=False)
+    before = _committed_state()
+    assert main(["reproduce", "dgb_budget", "--profile", "smoke"]) == 0
+    written = Path("sgb-results") / "dgb_budget_digits_smoke.json"
+    assert f"wrote {written}" in capsys.readouterr().out
+    assert [p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file()] == [written]
+    assert _committed_state() == before
+    # a rerun reuses the finished run, says so, and leaves the file (and its provenance) as is
+    first = written.read_bytes()
+    assert main(["reproduce", "dgb_budget", "--profile", "smoke"]) == 0
+    out = capsys.readouterr().out
+    assert "reusing the finished DGB run" in out and f"kept {written}" in out
+    assert written.read_bytes() == first
+    # $SGB_RESULTS moves the default
+    monkeypatch.setenv("SGB_RESULTS", str(tmp_path / "elsewhere"))
+    assert main(["reproduce", "dgb_budget", "--profile", "smoke"]) == 0
+    assert (tmp_path / "elsewhere" / "dgb_budget_digits_smoke.json").is_file()
+
+
+def test_results_that_come_out_the_same_keep_the_provenance_of_the_run_that_made_them(
+    tmp_path,
+):
+    run = {"config": {"lr": 0.1}, "profile": "cpu", "seeds": [0]}
+    path = write_results(tmp_path / "x_cpu.json", {"acc": [0.5]}, run | {"date": "day 1"})
+    write_results(path, {"acc": [0.5]}, run | {"date": "day 2", "wall_time_s": 1.0})
+    assert json.loads(path.read_text())["provenance"]["date"] == "day 1"
+    write_results(path, {"acc": [0.6]}, run | {"date": "day 3"})
+    assert json.loads(path.read_text())["provenance"]["date"] == "day 3"
+    write_results(path, {"acc": [0.6]}, run | {"seeds": [0, 1], "date": "day 4"})
+    assert json.loads(path.read_text())["provenance"]["date"] == "day 4"
+
+
+def test_help_describes_every_experiment_with_its_figure_inputs_and_costs(capsys):
+    with pytest.raises(SystemExit):
+        main(["reproduce", "--help"])
+    text = capsys.readouterr().out
+    assert text.count("\n") > 3 * len(EXPERIMENTS)
+    for name, experiment in EXPERIMENTS.items():
+        assert experiment.figure and experiment.inputs, f"{name} is not described"
+        assert set(experiment.costs) == set(PROFILE_NAMES), f"{name}: cost of every profile"
+        assert re.search(rf"^  {name}: ", text, re.MULTILINE)
+    flat = " ".join(experiments_help().split())
+    datasets = {d for profile in fig2.PROFILES.values() for d in profile}
+    assert datasets >= {"fashion-mnist", "digits"}
+    for dataset in datasets:
+        assert dataset in flat, f"--help does not name fig2's dataset {dataset}"
+    assert "--env ant (default) or halfcheetah" in flat
+    assert "$SGB_RESULTS" in flat and "./sgb-results" in flat and MAINTAINER_FLAG in flat
+
+
+def _readme_commands() -> list[str]:
+    readme = (ROOT / "README.md").read_text()
+    commands = re.findall(r"python -m sgb (reproduce[^`#\n]*)", readme)
+    return [c.strip() for c in commands if "--help" not in c]
+
+
+def test_the_readme_commands_parse_and_match_the_makefile():
+    commands = _readme_commands()
+    assert len(commands) >= 8
+    parser = build_parser()
+    for command in commands:
+        words = [{"D": "digits", "E": "ant"}.get(w, w) for w in shlex.split(command)]
+        parser.parse_args(words)  # exits on an unknown experiment or option
+    makefile = (ROOT / "Makefile").read_text()
+    assert "$(BIN)/python -m sgb reproduce $(EXPERIMENT) $(ARGS)" in makefile
+    readme = (ROOT / "README.md").read_text()
+    for experiment, args in re.findall(r'make reproduce EXPERIMENT=(\S+) ARGS="([^"]*)"', readme):
+        assert f"reproduce {experiment} {args}" in commands, f"no python line for {args}"
