@@ -1,12 +1,10 @@
 """Figures of the ``populations`` experiment (``sgb.experiments.populations``): how well
-the episodes tell a genome's individuals apart, Figure 4E's scatter with its error bars,
-and Figure 5's difference per genome and pooled."""
+the episodes tell a genome's individuals apart, and Figure 5's difference per genome and
+pooled."""
 
 import numpy as np
 
-from sgb import stats
 from sgb.plots import PALETTE, subplots
-from sgb.verdicts import fisher_r
 
 BODY_STYLE = {"normal": ("sgb", "o", "normal legs"), "long_legs": ("dgb", "s", "long legs")}
 SETTINGS_COLOR = {"ours": "sgb", "authors": "authors"}
@@ -44,31 +42,6 @@ def plot_icc(genomes: dict, ax=None):
     episodes = next(iter(done.values()))["summary"]["normal"]["variance_split"]["episodes"]
     ax.set_xlabel(f"ICC of one episode (95 % interval; {episodes} episodes each)")
     ax.legend(loc="best", fontsize=8)
-    return ax
-
-
-def plot_legs(normal, long_legs, ax=None):
-    """Each individual's mean return on the normal vs the long-legged body (``normal``,
-    ``long_legs``: (N, E)), the SEM over its episodes as bars; r with its Fisher-z
-    interval in the title."""
-    if ax is None:
-        _, ax = subplots()
-    x, y = np.asarray(normal), np.asarray(long_legs)
-    ax.errorbar(
-        x.mean(1),
-        y.mean(1),
-        xerr=stats.sem(x, axis=1),
-        yerr=stats.sem(y, axis=1),
-        fmt="o",
-        ms=3,
-        alpha=0.6,
-        elinewidth=0.6,
-        color=PALETTE["individuals"],
-    )
-    r = fisher_r(x.mean(1), y.mean(1))
-    ax.set_xlabel(f"mean return of {x.shape[1]} episodes, normal legs")
-    ax.set_ylabel(f"mean return of {y.shape[1]} episodes, long legs")
-    ax.set_title(f"r = {r.estimate:.2f} (95 % interval {r.low:.2f} to {r.high:.2f}, n = {r.n})")
     return ax
 
 
