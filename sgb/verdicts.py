@@ -75,13 +75,6 @@ def welch(a, b) -> Test:
     return _t_test("Welch t", a.mean() - b.mean(), math.sqrt(va + vb), dof, min(a.size, b.size), 0)
 
 
-def welch_from_moments(mean_a: float, se_a: float, n_a: int, mean_b: float, se_b: float, n_b: int):
-    """Welch's t for mean_a - mean_b from each group's mean, standard error and size."""
-    va, vb = se_a**2, se_b**2
-    dof = (va + vb) ** 2 / (va**2 / (n_a - 1) + vb**2 / (n_b - 1))
-    return _t_test("Welch t", mean_a - mean_b, math.sqrt(va + vb), dof, min(n_a, n_b), 0)
-
-
 def paired(a, b) -> Test:
     """Paired t for mean(a - b) (same units measured twice); dof = n - 1."""
     a, b = _sample("a", a), _sample("b", b)
