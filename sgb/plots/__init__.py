@@ -14,7 +14,10 @@ PALETTE = {
 
 
 def apply_style() -> None:
-    """The book's matplotlib style: readable sizes, light grid, no top/right spines."""
+    """The book's matplotlib style: readable sizes, light grid, no top/right spines; in a
+    notebook, figures are shown as SVG (vector, sharp at any zoom) where the kernel
+    supports it (``use_svg``)."""
+    use_svg()
     mpl.rcParams.update(
         {
             "figure.dpi": 110,
@@ -28,6 +31,20 @@ def apply_style() -> None:
             "legend.frameon": False,
         }
     )
+
+
+def use_svg() -> bool:
+    """Show the notebook's inline figures as SVG; False (and nothing changed) outside an
+    IPython kernel, as in the tests and scripts, where figures are saved or not shown."""
+    try:
+        from IPython import get_ipython
+        from matplotlib_inline.backend_inline import set_matplotlib_formats
+    except ImportError:
+        return False
+    if get_ipython() is None:
+        return False
+    set_matplotlib_formats("svg")
+    return True
 
 
 def subplots(*args, **kwargs):

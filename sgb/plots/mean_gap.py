@@ -17,7 +17,7 @@ _SERIES = (
 
 
 def _cell_label(row: Mapping[str, Any]) -> str:
-    return f"{row['compression']:.0f}x\nrho {row['rho_init']:g}"
+    return f"{row['compression']:.0f}x\n$\\rho$ = {row['rho_init']:g}"
 
 
 def plot_mean_gap(ax: Axes, results: Mapping[str, Any]) -> Axes:
@@ -41,7 +41,7 @@ def plot_mean_gap(ax: Axes, results: Mapping[str, Any]) -> Axes:
         )
     ax.set_xticks(x, [_cell_label(row) for row in rows])
     ax.set_ylabel("innate test accuracy (%)")
-    ax.set_xlabel("compression (every parameter counted), rho at the start")
+    ax.set_xlabel(r"compression (every parameter counted), $\rho$ at the start")
     ax.set_title(str(results["dataset"]))
     ax.set_ylim(0, 100)
     ax.legend(fontsize=8, loc="upper right")

@@ -137,7 +137,7 @@ def plot_spread(summary: list[dict], axes=None):
         values, errors = [r[key] for r in summary], [r[f"sem_{key}"] for r in summary]
         ax.errorbar(sigma, values, yerr=errors, marker="o", capsize=3, color=color)
         ax.set_xscale("log")
-        ax.set_xlabel("initial sigma of every type pair")
+        ax.set_xlabel(r"initial $\sigma$ of every type pair")
         ax.set_ylabel(label)
     axes[0].axhline(0.0, color=PALETTE["mean_network"], ls="--", label="mean network")
     axes[0].legend(loc="best", fontsize=8)

@@ -33,27 +33,36 @@ def figure6(results: dict[str, Any]):
         w = np.linspace(lo, hi, 400)
         loss = theory.toy_loss(name)
         top, bottom = axes[0, col], axes[1, col]
-        top.plot(w, loss(jnp.asarray(w)), color="k", lw=1.5, label="L(w)")
+        top.plot(w, loss(jnp.asarray(w)), color="k", lw=1.5, label="$L(w)$")
         for i, color, marker, label in ((0, "k", "x", "start"), (-1, "red", "^", "end")):
             top.axvspan(
                 mu[i] - sigma[i],
                 mu[i] + sigma[i],
                 color=color,
                 alpha=0.12,
-                label=f"{label}: mu +- sigma",
+                label=f"{label}: $\\mu \\pm \\sigma$",
             )
-            top.plot(mu[i], loss(mu[i]), marker, color=color, ms=10, mew=2, label=f"{label}: mu")
-        top.set(title=f"{TITLES[name]} loss", xlabel="weight w", ylabel="loss L(w)")
+            top.plot(
+                mu[i], loss(mu[i]), marker, color=color, ms=10, mew=2, label=f"{label}: $\\mu$"
+            )
+        top.set(title=f"{TITLES[name]} loss", xlabel="weight $w$", ylabel="loss $L(w)$")
         top.legend(fontsize=7, loc="best")
         steps = np.arange(mu.size)
         gap, se = _a(run["gap"]), _a(run["gap_stderr"])
-        bottom.plot(steps, gap, color=PALETTE["sgb"], label="measured Delta L")
+        bottom.plot(steps, gap, color=PALETTE["sgb"], label=r"measured $\Delta L$")
         bottom.fill_between(steps, gap - 2 * se, gap + 2 * se, color=PALETTE["sgb"], alpha=0.25)
         bottom.plot(
-            steps, _a(run["prediction"]), "--", color=PALETTE["dgb"], label="1/2 L''(mu) sigma^2"
+            steps,
+            _a(run["prediction"]),
+            "--",
+            color=PALETTE["dgb"],
+            label=r"$\frac{1}{2} L''(\mu)\,\sigma^2$",
         )
         bottom.axhline(0, color="grey", lw=0.8)
-        bottom.set(xlabel="gradient step", ylabel="Delta L = E[L(mu+sigma eps)] - L(mu)")
+        bottom.set(
+            xlabel="gradient step",
+            ylabel=r"$\Delta L = \mathbb{E}[L(\mu + \sigma\epsilon)] - L(\mu)$",
+        )
         bottom.legend(fontsize=7)
     return fig
 
@@ -71,9 +80,9 @@ def sign_scan(results: dict[str, Any]):
             )
         ax.axhline(0, color="grey", lw=0.8)
         ax.set(
-            title=f"{TITLES[name]} (sigma0 = {row['sigma0']:g})",
-            xlabel="starting mean mu0",
-            ylabel="Delta L",
+            title=f"{TITLES[name]} ($\\sigma_0$ = {row['sigma0']:g})",
+            xlabel=r"starting mean $\mu_0$",
+            ylabel=r"$\Delta L$",
         )
         ax.set_yscale("symlog", linthresh=1e-4)
         ax.legend(fontsize=7)
@@ -95,8 +104,8 @@ def sign_map(results: dict[str, Any]):
         image = ax.imshow(
             signs.T, origin="lower", aspect="auto", extent=extent, cmap=cmap, vmin=-1.5, vmax=1.5
         )
-        ax.set(title=f"sign of Delta L, {title}", xlabel="starting mean mu0")
-    axes[0].set_ylabel("starting spread sigma0")
+        ax.set(title=f"sign of $\\Delta L$, {title}", xlabel=r"starting mean $\mu_0$")
+    axes[0].set_ylabel(r"starting spread $\sigma_0$")
     bar = fig.colorbar(image, ax=axes, ticks=[-1, 0, 1])
     bar.ax.set_yticklabels(["< 0: individuals better", "~ 0 (within 3 SE)", "> 0: mean better"])
     return fig
@@ -123,9 +132,9 @@ def breakdown(results: dict[str, Any]):
         ax.plot(sigma, _a(row["predicted"]), "--", color=PALETTE["dgb"], label="second order")
         ax.axhline(0, color="grey", lw=0.8)
         ax.set(
-            title=f"mu = {row['mu']:g} (L'' = {row['curvature']:.2f})",
-            xlabel="spread sigma",
-            ylabel="Delta L",
+            title=f"$\\mu$ = {row['mu']:g} ($L''$ = {row['curvature']:.2f})",
+            xlabel=r"spread $\sigma$",
+            ylabel=r"$\Delta L$",
         )
         ax.legend(fontsize=7)
     return fig
@@ -154,7 +163,7 @@ def network_gap(results: dict[str, Any]):
             marker + "--",
             color=color,
             mfc="none",
-            label=f"{label}: 1/2 tr(H diag sigma^2)",
+            label=f"{label}: $\\frac{{1}}{{2}}\\,\\mathrm{{tr}}(H\\,\\mathrm{{diag}}\\,\\sigma^2)$",
         )
         for key, style, fill in (
             ("train_error_rate", "-", "full"),
@@ -172,15 +181,15 @@ def network_gap(results: dict[str, Any]):
     axes[0].set(
         xscale="log",
         yscale="log",
-        xlabel="spread scale c (sigma -> c sigma)",
-        ylabel="Delta L, cross-entropy (nats)",
+        xlabel=r"spread scale $c$ ($\sigma \to c\,\sigma$)",
+        ylabel=r"$\Delta L$, cross-entropy (nats)",
         title="training cross-entropy",
     )
     axes[1].axhline(0, color="grey", lw=0.8)
     axes[1].set(
         xscale="log",
-        xlabel="spread scale c (sigma -> c sigma)",
-        ylabel="Delta error (percentage points)",
+        xlabel=r"spread scale $c$ ($\sigma \to c\,\sigma$)",
+        ylabel=r"$\Delta$ error (percentage points)",
         title="error rate: individuals - mean network",
     )
     for ax in axes:
@@ -208,14 +217,14 @@ def elbo_toy(results: dict[str, Any]):
         ax.plot(steps, np.maximum(raw, floor), color=color, lw=0.7, alpha=0.7)
         if predicted[i] > 0:
             ax.axhline(predicted[i], color=color, ls=":", lw=1.5)
-    ax.plot([], [], color="grey", lw=1.8, label="trained as softplus(rho)")
-    ax.plot([], [], color="grey", lw=0.7, label="trained as sigma")
+    ax.plot([], [], color="grey", lw=1.8, label=r"trained as softplus($\rho$)")
+    ax.plot([], [], color="grey", lw=0.7, label=r"trained as $\sigma$")
     ax.plot([], [], color="grey", ls=":", label="sqrt(c / (H + c lambda))")
     ax.set(
         yscale="log",
         ylim=(floor, 1.0),
         xlabel="gradient step",
-        ylabel="spread sigma",
+        ylabel=r"spread $\sigma$",
         title=(
             f"L(w) = w^2/2 (H = 1), prior N(0, {toy['prior_sigma']:g}^2), "
             f"learning rate {toy['learning_rate']:g}"
@@ -263,15 +272,17 @@ def fixed_point(fixed_points: list[dict[str, Any]]):
                     ),
                 )
             first = net["runs"][0]
-            ax.axhline(first["sigma2_init"], color="grey", ls=":", lw=1, label="sigma^2 at init")
+            ax.axhline(
+                first["sigma2_init"], color="grey", ls=":", lw=1, label=r"$\sigma^2$ at init"
+            )
             lo, hi = ax.get_xlim()
             ends = np.array([min(lo, first["sigma2_init"]), hi])
             ax.plot(ends, ends, "k--", lw=1, label="learned = predicted")
             ax.set(
                 xscale="log",
                 yscale="log",
-                xlabel="predicted c / (H + c lambda)  (weight^2)",
-                ylabel="learned sigma^2  (weight^2)",
+                xlabel=r"predicted $c / (H + c\lambda)$  (weight$^2$)",
+                ylabel=r"learned $\sigma^2$  (weight$^2$)",
                 title=f"types {types_label(net['cell_types'])}, {where}",
             )
             ax.legend(fontsize=7, loc="upper left")
