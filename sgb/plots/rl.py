@@ -1,5 +1,6 @@
-"""Figures of chapter 5: cell-type sweeps (Fig. 3C/D), population scatters (4E/F), mean network (5),
-the initial-spread sweep, the HalfCheetah backends, and rendered frames of the bodies."""
+"""Figures of chapter 5: cell-type sweeps (the paper's Figure 3C/D), population scatters
+(4E/F), the mean network (5), the initial-spread sweep, the HalfCheetah backends, and
+rendered frames of the bodies (still, or walking with each tile labelled)."""
 
 import numpy as np
 
@@ -172,3 +173,62 @@ def show_images(images: dict[str, np.ndarray], axes=None):
         ax.set_title(title)
         ax.set_axis_off()
     return axes
+
+
+def _font(size: int):
+    """PIL's default font at ``size`` pixels (a scalable one where Pillow has FreeType)."""
+    from PIL import ImageFont
+
+    try:
+        return ImageFont.load_default(size=size)
+    except TypeError:  # Pillow < 10.1: one small bitmap font
+        return ImageFont.load_default()
+
+
+def _band(width: int, height: int, texts: list[str], font_size: int) -> np.ndarray:
+    """A white band (height, width, 3) with ``texts`` centred in equal columns."""
+    from PIL import Image, ImageDraw
+
+    band = Image.new("RGB", (width, height), "white")
+    draw = ImageDraw.Draw(band)
+    font = _font(font_size)
+    column = width / len(texts)
+    for i, text in enumerate(texts):
+        draw.text(((i + 0.5) * column, height / 2), text, fill="black", font=font, anchor="mm")
+    return np.asarray(band)
+
+
+def label_tiles(
+    frames: np.ndarray, labels: list[str], title: str | None = None, font_size: int = 13
+) -> np.ndarray:
+    """Frames (T, height, n * width, 3) of n tiles side by side (``walking_frames``), with
+    each tile's label in a white band above it and, if given, ``title`` in a band above
+    the row: (T, height + bands, n * width, 3), the frames themselves unchanged below."""
+    frames = np.asarray(frames)
+    if frames.ndim != 4 or frames.shape[-1] != 3:
+        raise ValueError(f"frames must be (T, height, width, 3), got shape {frames.shape}")
+    if not labels or frames.shape[2] % len(labels):
+        raise ValueError(
+            f"{len(labels)} labels do not split {frames.shape[2]} pixels into equal tiles"
+        )
+    height = int(1.7 * font_size)
+    bands = [_band(frames.shape[2], height, list(labels), font_size)]
+    if title is not None:
+        bands.insert(0, _band(frames.shape[2], height, [title], font_size + 1))
+    top = np.concatenate(bands, axis=0).astype(frames.dtype)
+    return np.concatenate([np.broadcast_to(top, (len(frames), *top.shape)), frames], axis=1)
+
+
+def stack_rows(rows: list[np.ndarray], gap: int = 6) -> np.ndarray:
+    """Labelled rows of frames (``label_tiles``), each (T, h_i, width, 3), one above the
+    other with a white gap of ``gap`` pixels: one animation of them all. Rows of different
+    lengths are cut to the shortest."""
+    length = min(len(r) for r in rows)
+    width = rows[0].shape[2]
+    if any(r.shape[2] != width for r in rows):
+        raise ValueError(f"rows must be equally wide, got {[r.shape[2] for r in rows]}")
+    white = np.full((length, gap, width, 3), 255, dtype=rows[0].dtype)
+    parts = []
+    for i, row in enumerate(rows):
+        parts.extend([white] * (i > 0) + [row[:length]])
+    return np.concatenate(parts, axis=1)
