@@ -37,10 +37,11 @@ from brax.training.agents.ppo import networks as brax_networks
 from brax.training.agents.ppo import train as brax_ppo
 
 from sgb.provenance import atomic_write, git_commit, provenance, write_results
+from sgb.rl.agent import NetworkConfig
 from sgb.rl.envs import EnvSpec, make_env
-from sgb.rl.networks import NetworkConfig
 from sgb.rl.population import population_returns
-from sgb.rl.ppo import PPOConfig, compiled_config, init_state, train, train_iterations
+from sgb.rl.ppo import PPOConfig, init_state, train
+from sgb.rl.trainer import make_trainer
 
 
 def ours(config: PPOConfig, seed: int) -> dict:
@@ -107,16 +108,16 @@ def brax_reference(
 def _chunk_rate(config: PPOConfig, iterations: int) -> Callable[[], float]:
     """A function that trains ``iterations`` more PPO iterations of one run of ``config``
     (seed 0, compiled beforehand) and returns their training env-steps/s."""
-    step_config = compiled_config(config)
+    step = make_trainer(config.step_settings()).iterations
     state = init_state(config, seed=0)
     for _ in range(2):  # compile and warm up, outside the timed rounds
-        state, _ = train_iterations(state, step_config, iterations)
+        state, _ = step(state, iterations)
     jax.block_until_ready(state)
 
     def chunk() -> float:
         nonlocal state
         start = time.perf_counter()
-        state, _ = train_iterations(state, step_config, iterations)
+        state, _ = step(state, iterations)
         jax.block_until_ready(state)
         return iterations * config.steps_per_iteration / (time.perf_counter() - start)
 

@@ -12,7 +12,8 @@ import flax.linen as nn
 import jax.numpy as jnp
 import numpy as np
 
-from sgb.layers import SGBMLP, KLCounting
+from sgb.genome import KLCounting
+from sgb.layers import SGBMLP
 from sgb.priors import GaussianPrior, Prior
 
 

@@ -7,7 +7,7 @@ and the value) at the first loss that is not finite or whose magnitude exceeds
 near zero may still grow to ``BLOWUP_FACTOR``), at the first fit error above a bound it
 is given, and at a non-finite parameter. Its message names the likely cause from what it
 checks when it stops (``likely_cause``): nan or inf in the data, labels out of range, an
-empty set, a spread parameter ``rho`` beyond the range of ``sgb.layers.softplus``, and
+empty set, a spread parameter ``rho`` beyond the range of ``sgb.genome.softplus``, and
 else the learning rate.
 
 The thresholds are far from every run of the committed results: a loss can only trip
@@ -27,7 +27,7 @@ import numpy as np
 
 BLOWUP_FACTOR = 1e4
 FIT_BOUND = 1e4
-RHO_LIMIT = 88.0  # sgb.layers.SOFTPLUS_LIMIT: where float32's exp(rho) stops being finite
+RHO_LIMIT = 88.0  # sgb.genome.SOFTPLUS_LIMIT: where float32's exp(rho) stops being finite
 LEARNING_RATE = "the learning rate, probably too large: try a smaller one"
 
 

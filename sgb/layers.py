@@ -1,9 +1,10 @@
 """SGB layers (Flax linen): a genome of per-type-pair means and spreads, sampled per synapse.
 
-A layer holds a type table ``mu`` and ``rho`` (sigma = softplus(rho)) and
-per-neuron biases. Each call draws every synapse's weight independently from
-its type pair's Gaussian, using the ``"sample"`` PRNG stream, or uses the
-means alone when ``mean_network=True``. The KL term of the layer is sown into
+A layer holds a type table ``mu`` and ``rho`` (sigma = softplus(rho)) and per-neuron
+biases; ``sgb.genome`` holds the functions that develop a kernel from them and reads
+them back (``sgb.genome.of_params``). Each call draws every synapse's weight
+independently from its type pair's Gaussian, using the ``"sample"`` PRNG stream, or uses
+the means alone when ``mean_network=True``. The KL term of the layer is sown into
 the ``"losses"`` collection and the drawn kernel and its standard normal
 noise into ``"individual"`` (each apply replaces what an earlier one sowed).
 ``sgb.population.init_params`` initialises a model's parameters alone.
@@ -21,44 +22,22 @@ with the default path).
 """
 
 from collections.abc import Sequence
-from typing import Literal
 
 import flax.linen as nn
 import jax
 import jax.numpy as jnp
-import numpy as np
 
 from sgb import validation
-from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blocks, type_sizes
-from sgb.noise import standard_normal
+from sgb.celltypes import assign_cell_types, expand_table, type_sizes
+from sgb.genome import (
+    KL_COUNTINGS,
+    KLCounting,
+    draw_layer_noise,
+    individual_kernel,
+    layer_kl,
+    softplus,
+)
 from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
-
-KLCounting = Literal["synapse", "table"]
-KL_COUNTINGS = ("synapse", "table")
-SOFTPLUS_LIMIT = 88.0  # the largest x whose exp(x) float32 holds with room to spare
-
-
-@jax.custom_jvp
-def softplus(x: jnp.ndarray) -> jnp.ndarray:
-    """log(1 + e^x): the one softplus of the package's spreads, sigma = softplus(rho) of
-    every genome, wherever it is computed (the layers, their KL, the RL networks).
-
-    Computed as log1p(exp(min(x, SOFTPLUS_LIMIT))): bit for bit the log1p(exp(x)) the
-    layers used before, wherever float32's exp(x) is finite (x <= 88); equal to
-    ``jax.nn.softplus`` to float32 rounding (bit for bit for x <= 0, where every trained
-    rho lies). Above 88, where log1p(exp(x)) overflowed to inf, it saturates at 88, a
-    spread no genome reaches; its gradient stays sigmoid(x) everywhere, so a rho up there
-    is still pulled back. Ending in log1p matters for speed: XLA computes it once per
-    type-pair table, where ``jax.nn.softplus``, which ends in a max and an add, is fused
-    into the per-synapse loop of ``individual_kernel`` (see there).
-    """
-    return jnp.log1p(jnp.exp(jnp.minimum(x, SOFTPLUS_LIMIT)))
-
-
-@softplus.defjvp
-def _softplus_jvp(primals, tangents):
-    (x,), (t,) = primals, tangents
-    return softplus(x), t * jax.nn.sigmoid(x)
 
 
 def _check_types(name: str, types: int, neurons: int) -> None:
@@ -83,52 +62,6 @@ def _check_input(x: jnp.ndarray, expected: int | None) -> int:
     return width
 
 
-def genome_kl(
-    prior: Prior,
-    mu: jnp.ndarray,
-    sigma: jnp.ndarray,
-    shape: Sequence[int],
-    counting: KLCounting,
-    key: jax.Array,
-) -> jnp.ndarray:
-    """KL of one layer's genome to the prior, a scalar (nats).
-
-    ``mu``, ``sigma``: type tables (k_in, k_out, ...) of a kernel of ``shape``. Every
-    synapse of a type pair has that pair's Gaussian, so the KL is computed per pair: in
-    closed form for a Gaussian prior, else as the one-draw Monte Carlo term
-    log q(w) - log p(w) at w = mu + sigma * eps, eps ~ N(0, 1) from ``key`` (unbiased; drawn by
-    ``sgb.noise.standard_normal``, about 5x cheaper here than ``jax.random.normal``).
-    ``counting="synapse"`` weights each pair by its number of synapses (the KL of the
-    full weight matrix, as Bayes by backprop counts it); ``"table"`` counts each pair once.
-    The cost is that of the tables, not of the kernel: the one KL of the layers and of
-    the RL actor-critic alike. Its arguments are checked at the Python level (shapes
-    always; values, sigma > 0 and finite, only outside ``jit``), at no cost per step.
-    """
-    validation.instance("prior", prior, PRIOR_TYPES)
-    validation.choice("counting", counting, KL_COUNTINGS)
-    mu = validation.array("mu", mu, min_ndim=1)
-    sigma = validation.array("sigma", sigma)
-    if tuple(sigma.shape) != tuple(mu.shape):
-        raise ValueError(f"sigma must have mu's shape {tuple(mu.shape)}, got {tuple(sigma.shape)}")
-    shape = validation.integers("shape", shape)
-    if len(shape) != len(mu.shape):
-        raise ValueError(f"shape {shape} must have one entry per axis of mu {tuple(mu.shape)}")
-    if not validation.is_traced(sigma) and not bool(np.all(np.asarray(sigma) > 0)):
-        raise ValueError("sigma must be > 0 (and not nan)")
-    if isinstance(prior, GaussianPrior):
-        per_pair = prior.kl(mu, sigma)
-    else:
-        validation.prng_key("key", key)
-        per_pair = prior.kl(mu, sigma, mu + sigma * standard_normal(key, mu.shape))
-    counts = jnp.asarray(block_counts(shape, mu.shape), dtype=mu.dtype)
-    return _count_pairs(per_pair, counts, counting)
-
-
-def _count_pairs(per_pair: jnp.ndarray, counts: jnp.ndarray, counting: KLCounting) -> jnp.ndarray:
-    """Total KL from per-type-pair terms: weighted by synapses per pair, or once each."""
-    return jnp.sum(per_pair * counts) if counting == "synapse" else jnp.sum(per_pair)
-
-
 def _sum_by_type(x: jnp.ndarray, types: int) -> jnp.ndarray:
     """(..., n) -> (..., types): the sum of each cell type's contiguous block of neurons."""
     n = x.shape[-1]
@@ -150,87 +83,6 @@ def type_matmul(x: jnp.ndarray, table: jnp.ndarray, features: int) -> jnp.ndarra
     if k_out == features:
         return y
     return jnp.repeat(y, type_sizes(features, k_out), axis=-1, total_repeat_length=features)
-
-
-def individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
-    """Individuals' full kernels from type tables ``mu``, ``rho`` (k_in, k_out, ...) and
-    their ``noise`` (..., n_in, n_out, ...): mu + softplus(rho) * noise, each synapse from
-    its pair. Axes of ``noise`` before the table's are individuals (none for one).
-
-    Three things keep its cost near that of the noise alone (``benchmarks/bench_layers.py``):
-
-    - ``softplus`` ends in log1p(exp(.)), which XLA computes once per type pair;
-      ``jax.nn.softplus`` also reads rho through a max that XLA fused into the
-      per-synapse loop (7x slower for 784 x 800 of 30 x 100 types);
-    - the gradient takes the noise back from the kernel, (kernel - mu) / sigma, instead
-      of from ``noise``, which XLA would compute a second time inside the backward pass;
-    - the gradient sums over individuals by pairwise halving (``_sum_leading``).
-
-    The shapes are checked when it is traced (``ValueError``/``TypeError`` naming the
-    argument), at no cost per call of a compiled step.
-    """
-    mu = validation.array("mu", mu, min_ndim=1)
-    rho = validation.array("rho", rho)
-    noise = validation.array("noise", noise, min_ndim=len(mu.shape))
-    if tuple(rho.shape) != tuple(mu.shape):
-        raise ValueError(f"rho must have mu's shape {tuple(mu.shape)}, got {tuple(rho.shape)}")
-    for name, value in (("mu", mu), ("rho", rho), ("noise", noise)):
-        if not jnp.issubdtype(value.dtype, jnp.floating):
-            raise TypeError(f"{name} must be a float array, got dtype {value.dtype}")
-    for axis, (k, n) in enumerate(zip(mu.shape, noise.shape[noise.ndim - mu.ndim :], strict=True)):
-        if not 0 < k <= n:
-            raise ValueError(
-                f"noise has {n} neurons along axis {axis} of the kernel, fewer than mu's {k} "
-                "cell types (or none)"
-            )
-    return _individual_kernel(mu, rho, noise)
-
-
-@jax.custom_vjp
-def _individual_kernel(mu: jnp.ndarray, rho: jnp.ndarray, noise: jnp.ndarray) -> jnp.ndarray:
-    shape = noise.shape[noise.ndim - mu.ndim :]
-    return expand_table(mu, shape) + expand_table(_sigma(rho), shape) * noise
-
-
-def _sigma(rho: jnp.ndarray) -> jnp.ndarray:
-    """softplus(rho), kept on the type table by XLA (see ``softplus``)."""
-    return softplus(rho)
-
-
-def _sum_leading(x: jnp.ndarray, n: int) -> jnp.ndarray:
-    """``x`` summed over its first ``n`` axes, by adding halves until one is left.
-
-    XLA on CPU fuses a sum over a leading axis of a product into a slow loop (4-5x the
-    halving's time for 32 individuals of 128 x 128 before a block sum).
-    """
-    x = x.reshape((-1, *x.shape[n:]))
-    while x.shape[0] > 1:
-        half = x.shape[0] // 2
-        x = jnp.concatenate([x[:half] + x[half : 2 * half], x[2 * half :]])
-    return x[0]
-
-
-def _individual_kernel_forward(mu, rho, noise):
-    kernel = _individual_kernel(mu, rho, noise)
-    return kernel, (mu, rho, kernel)
-
-
-def _individual_kernel_backward(residuals, grad):
-    mu, rho, kernel = residuals
-    n = kernel.ndim - mu.ndim
-    shape = kernel.shape[n:]
-    sigma = _sigma(rho)
-    # d sigma / d rho = sigmoid(rho); divided by sigma it tends to 1 as rho -> -inf
-    dsigma_over_sigma = jnp.where(rho < -20.0, 1.0, jax.nn.sigmoid(rho) / sigma)
-    sigma_noise = kernel - expand_table(mu, shape)
-    return (
-        sum_blocks(_sum_leading(grad, n), mu.shape),
-        sum_blocks(_sum_leading(grad * sigma_noise, n), mu.shape) * dsigma_over_sigma,
-        expand_table(sigma, shape) * grad,
-    )
-
-
-_individual_kernel.defvjp(_individual_kernel_forward, _individual_kernel_backward)
 
 
 @jax.custom_vjp
@@ -265,18 +117,6 @@ def _individual_matmul_backward(residuals, grad):
 individual_matmul.defvjp(_individual_matmul_forward, _individual_matmul_backward)
 
 
-def sample_kernel(
-    mu: jnp.ndarray, rho: jnp.ndarray, key: jax.Array, shape: tuple[int, ...]
-) -> tuple[jnp.ndarray, jnp.ndarray]:
-    """The individual drawn with ``key``: its kernel of ``shape`` and the noise that made it.
-
-    The one way to draw an individual's weights, used by these layers and by the RL
-    actor-critic (``sgb.rl.networks``) alike.
-    """
-    noise = standard_normal(key, shape)
-    return individual_kernel(mu, rho, noise), noise
-
-
 def _replace(_previous, new):
     """Sow reducer that keeps only the latest value, so repeated applies never accumulate."""
     return new
@@ -297,7 +137,7 @@ class _GenomeKernel(nn.Module):
         self, mean_network: bool, tables_only: bool = False
     ) -> jnp.ndarray | tuple[jnp.ndarray, jnp.ndarray]:
         """The drawn kernel (the mean kernel if ``mean_network``); with ``tables_only``,
-        the type tables (mu, sigma) instead. Sows the KL (``genome_kl``) when sampling."""
+        the type tables (mu, sigma) instead. Sows the KL (``sgb.genome.layer_kl``) when sampling."""
         mu = self.param("mu", nn.initializers.normal(self.mean_init_std), self.types)
         rho = self.param("rho", nn.initializers.constant(self.rho_init), self.types)
         sigma = softplus(rho)
@@ -308,7 +148,8 @@ class _GenomeKernel(nn.Module):
         if mean_network:
             kernel = expand_table(mu, self.shape)
         else:
-            kernel, noise = sample_kernel(mu, rho, self.make_rng("sample"), self.shape)
+            noise = draw_layer_noise(self.make_rng("sample"), self.shape)
+            kernel = individual_kernel(mu, rho, noise)
             self._sow_kl(mu, sigma)
             self.sow("individual", "noise", noise, init_fn=lambda: None, reduce_fn=_replace)
         self.sow("individual", "kernel", kernel, init_fn=lambda: None, reduce_fn=_replace)
@@ -316,7 +157,7 @@ class _GenomeKernel(nn.Module):
 
     def _sow_kl(self, mu: jnp.ndarray, sigma: jnp.ndarray) -> None:
         key = self.make_rng("sample")
-        kl = genome_kl(self.prior, mu, sigma, self.shape, self.kl_counting, key)
+        kl = layer_kl(self.prior, mu, sigma, self.shape, self.kl_counting, key)
         self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
 
 
@@ -478,18 +319,3 @@ class SGBMLP(nn.Module):
             if i < len(self.widths) - 1:
                 x = nn.relu(x)
         return x
-
-
-def genome_tables(params: dict) -> dict[str, tuple[jnp.ndarray, jnp.ndarray]]:
-    """Each SGB layer's type tables (mu, sigma), keyed by the layer's path, e.g. "SGBDense_0"."""
-    tables = {}
-
-    def visit(tree: dict, path: tuple[str, ...]) -> None:
-        for name, sub in tree.items():
-            if name == "genome":
-                tables["/".join(path)] = (sub["mu"], softplus(sub["rho"]))
-            elif isinstance(sub, dict):
-                visit(sub, (*path, name))
-
-    visit(params["params"], ())
-    return tables

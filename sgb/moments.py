@@ -2,7 +2,7 @@
 propagated through the genome's Gaussian weights, layer by layer.
 
 An individual's weight ``w_ij`` is drawn independently from N(M_ij, S_ij^2), with ``M`` and
-``S`` its type pair's mean and spread (``sgb.layers``: S = softplus(rho)). For a layer
+``S`` its type pair's mean and spread (``sgb.genome``: S = softplus(rho)). For a layer
 a = x @ W + b whose inputs ``x_i`` are independent of each other and of ``W``, with means
 ``m_x`` and variances ``v_x``, the pre-activations have
 
@@ -35,8 +35,8 @@ import jax
 import jax.numpy as jnp
 from jax.scipy.stats import norm
 
+from sgb import genome
 from sgb.celltypes import block_counts, expand_table
-from sgb.layers import softplus
 
 
 class GaussianLayer(NamedTuple):
@@ -122,12 +122,11 @@ def mlp_layers(params: Any) -> list[GaussianLayer]:
     head's params with the trunk's features as inputs).
     """
     inner = params["params"]
-    layers = []
-    for name in _layer_names(inner):
-        genome = inner[name]["genome"]
-        sigma = softplus(genome["rho"])  # as sgb.layers.individual_kernel draws it
-        layers.append(GaussianLayer(genome["mu"], sigma, inner[name]["bias"]))
-    return layers
+    tables = genome.of_params(params)
+    return [
+        GaussianLayer(tables[name].mu, genome.sigma(tables[name]), inner[name]["bias"])
+        for name in _layer_names(inner)
+    ]
 
 
 def _layer_names(inner: dict) -> list[str]:
@@ -158,7 +157,7 @@ def layer_statistics(params: Any, in_features: int) -> list[dict[str, float]]:
     for name, layer in zip(_layer_names(params["params"]), mlp_layers(params), strict=True):
         n_out = int(layer.bias.shape[-1])
         counts = jnp.asarray(block_counts((n_in, n_out), layer.mu.shape), jnp.float32)
-        rho = params["params"][name]["genome"]["rho"]
+        rho = genome.of_params(params)[name].rho
 
         def average(table: jnp.ndarray, counts: jnp.ndarray = counts) -> float:
             return float(jnp.sum(table * counts) / jnp.sum(counts))

@@ -12,7 +12,7 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 
-from sgb import validation
+from sgb import genome, validation
 
 Params = Any
 
@@ -58,11 +58,12 @@ def _apply_population(model: nn.Module, params: Params, x: jnp.ndarray, keys: ja
 def individual_kernels(
     model: nn.Module, params: Params, x: jnp.ndarray, key: jax.Array | None
 ) -> dict:
-    """The kernels of one individual (or of the mean network for ``key=None``), by layer."""
+    """The kernels of one individual (or of the mean network for ``key=None``), by layer
+    path (``sgb.genome.of_params``'s keys)."""
     x = _check(model, x)
     if key is None:
         _, state = model.apply(params, x, mean_network=True, mutable=["individual"])
     else:
         validation.prng_key("key", key)
         _, state = model.apply(params, x, rngs={"sample": key}, mutable=["individual"])
-    return state["individual"]
+    return genome.sown(state["individual"], "kernel")

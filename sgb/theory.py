@@ -24,9 +24,11 @@ import jax
 import jax.numpy as jnp
 from jax.flatten_util import ravel_pytree
 
+from sgb import genome
 from sgb.celltypes import block_counts, expand_table, sum_blocks
 from sgb.divergence import check_trajectory
 from sgb.elbo import cross_entropy
+from sgb.genome import LayerGenome
 from sgb.layers import SGBMLP
 from sgb.population import individual_kernels
 from sgb.priors import GaussianPrior
@@ -743,25 +745,23 @@ def synapse_view(model: SGBMLP, params: Pytree, x: jnp.ndarray) -> SynapseView:
     kernels are the argument.
     """
     layers = params["params"]
-    mean = {
-        name: kernels["genome"]["kernel"]
-        for name, kernels in individual_kernels(model, {"params": layers}, x[:1], None).items()
-    }
+    mean = individual_kernels(model, {"params": layers}, x[:1], None)
+    tables = genome.of_params(params)
     sigma = {
-        name: expand_table(jax.nn.softplus(layers[name]["genome"]["rho"]), kernel.shape)
+        name: expand_table(genome.sigma(tables[name]), kernel.shape)
         for name, kernel in mean.items()
     }
     full_model = model.clone(cell_types=(None,) * len(model.cell_types))
 
     def forward(weights: dict, inputs: jnp.ndarray) -> jnp.ndarray:
-        full = {
-            name: {
-                "genome": {"mu": weights[name], "rho": jnp.zeros_like(weights[name])},
-                "bias": layer["bias"],
-            }
-            for name, layer in layers.items()
-        }
-        return full_model.apply({"params": full}, inputs, mean_network=True)
+        full = {name: {"bias": layer["bias"]} for name, layer in layers.items()}
+        return full_model.apply(
+            genome.with_tables(
+                {"params": full}, {n: LayerGenome(w, jnp.zeros_like(w)) for n, w in weights.items()}
+            ),
+            inputs,
+            mean_network=True,
+        )
 
     return SynapseView(mean, sigma, forward)
 
@@ -814,10 +814,10 @@ def genome_fixed_point(
     """
     if not isinstance(model.prior, GaussianPrior):
         raise ValueError(f"the fixed point needs a Gaussian prior, got {model.prior!r}")
-    layers = params["params"]
+    tables = genome.of_params(params)
     out = {}
     for name, diagonal in hessian_diag.items():
-        sigma = jax.nn.softplus(layers[name]["genome"]["rho"])
+        sigma = genome.sigma(tables[name])
         counts = jnp.asarray(block_counts(diagonal.shape, sigma.shape), diagonal.dtype)
         summed = sum_blocks(diagonal, sigma.shape)
         curvature = summed / counts if model.kl_counting == "synapse" else summed

@@ -8,8 +8,8 @@ import jax.numpy as jnp
 import pytest
 from brax.envs.base import Env, State
 
+from sgb.rl.agent import NetworkConfig
 from sgb.rl.envs import EnvSpec
-from sgb.rl.networks import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 
 EPISODE = 32

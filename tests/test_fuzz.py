@@ -31,7 +31,7 @@ from sgb.elbo import elbo_loss
 from sgb.layers import SGBMLP, SGBDense
 from sgb.population import init_params
 from sgb.priors import GaussianPrior, ScaleMixturePrior
-from sgb.rl.networks import NetworkConfig
+from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.supervised import ClassifierConfig, DenseConfig
 
@@ -411,7 +411,7 @@ def checkpoint(tmp_path_factory):
 
     config = reach_config(2, network=NetworkConfig(hidden=(4,), cell_types=2))
     result = ppo.TrainResult(
-        config, ppo.init_params(config, 0), init_normalizer(2), [64], [-9.5], 1e3, 1.0
+        config, ppo.initial_params(config, 0), init_normalizer(2), [64], [-9.5], 1e3, 1.0
     )
     path = checkpoints.save(tmp_path_factory.mktemp("agent") / "agent.msgpack", result)
     return path.read_bytes(), path.with_suffix(".json").read_bytes(), checkpoints.load(path)
@@ -447,13 +447,13 @@ def test_damaged_checkpoints(checkpoint, damage, which):
 @settings(FUZZ, max_examples=60)
 @given(st.data())
 def test_genome_kl_and_individual_kernel(data):
-    from sgb.layers import genome_kl, individual_kernel
+    from sgb.genome import individual_kernel, layer_kl
 
     k_in, k_out = data.draw(st.sampled_from([(1, 1), (2, 3)]))
     table = jnp.full((k_in, k_out), 0.1)
     key = jax.random.key(0)
-    which = data.draw(st.sampled_from(["genome_kl", "individual_kernel"]))
-    if which == "genome_kl":
+    which = data.draw(st.sampled_from(["layer_kl", "individual_kernel"]))
+    if which == "layer_kl":
         args, bad = draw_args(
             data.draw,
             {
@@ -474,7 +474,7 @@ def test_genome_kl_and_individual_kernel(data):
         if bad == "key" and isinstance(args["prior"], GaussianPrior):
             args["prior"] = ScaleMixturePrior()  # only the Monte Carlo KL draws with the key
         expect(
-            lambda: genome_kl(
+            lambda: layer_kl(
                 args["prior"], table, args["sigma"], args["shape"], args["counting"], args["key"]
             ),
             bad,
@@ -579,7 +579,7 @@ def test_noise_and_cell_type_helpers(data):
 @settings(FUZZ, max_examples=60)
 @given(x=st.floats(-30, 88, width=32), big=st.floats(88, 3.3999999521443642e38, width=32))
 def test_softplus_is_todays_in_the_normal_range_and_never_overflows(x, big):
-    from sgb.layers import softplus
+    from sgb.genome import softplus
 
     x32 = jnp.float32(x)
     assert softplus(x32) == jnp.log1p(jnp.exp(x32))  # bit for bit the kernels' former one
@@ -680,7 +680,7 @@ def test_population_and_ppo_entry_points(data):
     from sgb.rl.population import population_returns
 
     network = NetworkConfig(hidden=(4,), cell_types=2)
-    actor = ppo.init_params(reach_config(network=network), 0).actor
+    actor = ppo.initial_params(reach_config(network=network), 0).actor
     good = Normalizer(jnp.asarray(3.0), jnp.zeros(2), jnp.ones(2))
     args, bad = draw_args(
         data.draw,
@@ -713,4 +713,4 @@ def test_population_and_ppo_entry_points(data):
     expect(lambda: population_returns(SPEC, network, **args), bad)
     if bad is None:
         with pytest.raises(TypeError, match="seed"):
-            ppo.init_params(reach_config(network=network), float(args["seed"]) + 0.5)
+            ppo.initial_params(reach_config(network=network), float(args["seed"]) + 0.5)

@@ -7,12 +7,11 @@ from scipy import integrate, stats
 from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blocks, type_pair_block
 from sgb.compression import tree_param_count
 from sgb.elbo import elbo_loss, sown_kl
+from sgb.genome import LayerGenome, individual_kernel, layer_kl, of_params, with_tables
 from sgb.layers import (
     SGBMLP,
     SGBConv,
     SGBDense,
-    genome_kl,
-    individual_kernel,
     individual_matmul,
 )
 from sgb.population import (
@@ -32,10 +31,10 @@ def test_sampled_weights_of_a_type_pair_have_the_tables_mean_and_sigma():
     layer = SGBDense(120, in_types=3, out_types=4)
     x = jnp.ones((1, 90))
     params = _init(layer, x)
-    genome = params["params"]["genome"]
-    genome["mu"] = genome["mu"].at[1, 2].set(0.7)
-    genome["rho"] = genome["rho"].at[1, 2].set(jnp.log(jnp.expm1(0.25)))  # sigma = 0.25
-    kernel = individual_kernels(layer, params, x, jax.random.key(3))["genome"]["kernel"]
+    mu, rho = of_params(params)[""]  # a lone layer's genome sits at the root
+    mu, rho = mu.at[1, 2].set(0.7), rho.at[1, 2].set(jnp.log(jnp.expm1(0.25)))  # sigma = 0.25
+    params = with_tables(params, {"": LayerGenome(mu, rho)})
+    kernel = individual_kernels(layer, params, x, jax.random.key(3))[""]
     block = np.asarray(type_pair_block(kernel, (3, 4), (1, 2))).ravel()
     assert block.size == 30 * 30
     n = block.size
@@ -47,11 +46,11 @@ def test_sampled_weights_of_a_type_pair_have_the_tables_mean_and_sigma():
 def test_full_bnn_limit_has_independent_parameters_per_synapse():
     layer = SGBDense(7, in_types=None, out_types=None)
     params = _init(layer, jnp.ones((1, 5)))
-    genome = params["params"]["genome"]
-    assert genome["mu"].shape == (5, 7) and genome["rho"].shape == (5, 7)
+    genome = of_params(params)[""]
+    assert genome.mu.shape == (5, 7) and genome.rho.shape == (5, 7)
     assert tree_param_count(params) == 2 * 5 * 7 + 7
-    mean_kernel = individual_kernels(layer, params, jnp.ones((1, 5)), None)["genome"]["kernel"]
-    np.testing.assert_array_equal(mean_kernel, genome["mu"])
+    mean_kernel = individual_kernels(layer, params, jnp.ones((1, 5)), None)[""]
+    np.testing.assert_array_equal(mean_kernel, genome.mu)
     one_type = _init(SGBDense(7, in_types=1, out_types=1), jnp.ones((1, 5)))
     assert tree_param_count(one_type) == 2 + 7
 
@@ -142,15 +141,15 @@ def test_mean_network_makes_neurons_of_a_type_identical():
 
 
 @pytest.mark.parametrize("prior", [GaussianPrior(0.2), ScaleMixturePrior(0.5, 0.5, 0.01)])
-def test_genome_kl_counts_synapses_and_is_unbiased(prior):
+def test_layer_kl_counts_synapses_and_is_unbiased(prior):
     """Per synapse = block size x per pair; averaged over keys, the mixture's one-draw
     estimate per pair equals the KL integrated numerically (the Gaussian's is exact)."""
     mu = jnp.array([[0.1, -0.3]])
     sigma = jnp.array([[0.05, 0.1]])
     shape = (4, 6)  # one input type of 4 neurons, two output types of 3: 12 synapses per pair
     key = jax.random.key(3)
-    synapse = genome_kl(prior, mu, sigma, shape, "synapse", key)
-    table = genome_kl(prior, mu, sigma, shape, "table", key)
+    synapse = layer_kl(prior, mu, sigma, shape, "synapse", key)
+    table = layer_kl(prior, mu, sigma, shape, "table", key)
     assert float(synapse) == pytest.approx(12 * float(table), rel=1e-5)
 
     def pair_kl(m: float, s: float) -> float:
@@ -162,7 +161,7 @@ def test_genome_kl_counts_synapses_and_is_unbiased(prior):
 
     exact = sum(pair_kl(float(m), float(s)) for m, s in zip(mu[0], sigma[0], strict=True))
     keys = jax.random.split(jax.random.key(4), 20_000)
-    draws = np.asarray(jax.vmap(lambda k: genome_kl(prior, mu, sigma, shape, "table", k))(keys))
+    draws = np.asarray(jax.vmap(lambda k: layer_kl(prior, mu, sigma, shape, "table", k))(keys))
     assert abs(draws.mean() - exact) < 4 * draws.std() / np.sqrt(len(draws)) + 1e-5
 
 
@@ -188,10 +187,10 @@ def test_conv_layer_kernel_follows_its_four_d_genome():
     layer = SGBConv(features=6, kernel_size=(3, 3), types=(1, 3, 2, 3))
     x = jnp.ones((1, 5, 5, 4))
     params = _init(layer, x)
-    assert params["params"]["genome"]["mu"].shape == (1, 3, 2, 3)
+    assert of_params(params)[""].mu.shape == (1, 3, 2, 3)
     y = layer.apply(params, x, rngs={"sample": jax.random.key(0)})
     assert y.shape == (1, 5, 5, 6)
-    kernel = individual_kernels(layer, params, x, None)["genome"]["kernel"]
+    kernel = individual_kernels(layer, params, x, None)[""]
     assert kernel.shape == (3, 3, 4, 6)
     np.testing.assert_array_equal(kernel[0], kernel[2])  # one height type: rows share means
 

@@ -7,6 +7,8 @@ import pytest
 
 from sgb.celltypes import expand_table
 from sgb.elbo import cross_entropy, sown_kl
+from sgb.genome import LayerGenome, of_params, with_tables
+from sgb.genome import sigma as layer_sigma
 from sgb.layers import SGBMLP, SGBDense, type_matmul
 from sgb.population import apply_mean_network, init_params
 from sgb.priors import GaussianPrior, ScaleMixturePrior
@@ -18,17 +20,12 @@ def _spread_out(params, seed=0):
     """Give every type pair a different, appreciable sigma (0.1 to 0.6) and nonzero mean."""
     rng = np.random.default_rng(seed)
 
-    def visit(tree):
-        for name, sub in tree.items():
-            if name == "genome":
-                sigma = rng.uniform(0.1, 0.6, sub["rho"].shape)
-                sub["rho"] = jnp.asarray(np.log(np.expm1(sigma)), jnp.float32)
-                sub["mu"] = jnp.asarray(rng.normal(0.0, 0.5, sub["mu"].shape), jnp.float32)
-            elif isinstance(sub, dict):
-                visit(sub)
+    def spread(g: LayerGenome) -> LayerGenome:
+        sigma = rng.uniform(0.1, 0.6, g.rho.shape)
+        rho = jnp.asarray(np.log(np.expm1(sigma)), jnp.float32)
+        return LayerGenome(jnp.asarray(rng.normal(0.0, 0.5, g.mu.shape), jnp.float32), rho)
 
-    visit(params["params"])
-    return params
+    return with_tables(params, {name: spread(g) for name, g in of_params(params).items()})
 
 
 @pytest.mark.parametrize(
@@ -45,9 +42,9 @@ def test_local_preactivations_have_the_exact_mean_and_variance():
     layer = SGBDense(5, in_types=3, out_types=2)
     x = jax.random.normal(jax.random.key(0), (4, 7))
     params = _spread_out(init_params(layer, jax.random.key(1), x))
-    genome = params["params"]["genome"]
-    mu = expand_table(genome["mu"], (7, 5))
-    sigma = expand_table(jax.nn.softplus(genome["rho"]), (7, 5))
+    genome = of_params(params)[""]
+    mu = expand_table(genome.mu, (7, 5))
+    sigma = expand_table(layer_sigma(genome), (7, 5))
     mean, var = np.asarray(x @ mu), np.asarray(x**2 @ sigma**2)
 
     def draw(key):

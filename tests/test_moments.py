@@ -11,6 +11,7 @@ from sgb import moments
 from sgb.celltypes import expand_table
 from sgb.data import load
 from sgb.experiments import fig2, mean_gap
+from sgb.genome import of_params, with_tables
 from sgb.layers import SGBMLP
 from sgb.population import apply_mean_network, apply_population, init_params
 from sgb.provenance import read_results
@@ -132,8 +133,10 @@ def test_at_zero_spread_the_moment_network_is_the_mean_network(rho):
 def test_layer_statistics_weigh_type_pairs_by_their_synapses():
     model = SGBMLP((3,), (2, 1), in_features=5)  # input types of 3 and 2 neurons
     params = init_params(model, jax.random.key(0), jnp.zeros((1, 5)))
-    genome = params["params"]["SGBDense_0"]["genome"]
-    genome["mu"] = jnp.array([[1.0], [-4.0]])
+    tables = of_params(params)
+    params = with_tables(
+        params, {"SGBDense_0": tables["SGBDense_0"]._replace(mu=jnp.array([[1.0], [-4.0]]))}
+    )
     (stats,) = moments.layer_statistics(params, 5)
     assert stats["shape"] == [5, 3] and stats["types"] == [2, 1]
     assert stats["mean_abs_mu"] == pytest.approx((3 * 1.0 + 2 * 4.0) / 5)

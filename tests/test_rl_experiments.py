@@ -9,7 +9,7 @@ from reach import EPISODE, SHARED_STEP, shared_step_config
 
 from sgb.experiments import get_experiment, rl, rl_spread
 from sgb.provenance import read_results
-from sgb.rl.networks import NetworkConfig
+from sgb.rl.agent import NetworkConfig
 
 
 def test_summary_divides_by_the_mean_vanilla_return():

@@ -19,27 +19,23 @@ from reach import (
     shared_step_config,
 )
 
-from sgb import stats
+from sgb import genome, stats
 from sgb.divergence import TrainingDiverged
 from sgb.experiments.rl import PopulationConfig, authors_protocol
-from sgb.population import init_params
 from sgb.rl import checkpoints
-from sgb.rl.envs import EnvSpec
-from sgb.rl.networks import (
+from sgb.rl.agent import (
     MLP,
     NetworkConfig,
-    action_distribution,
-    draw_noise,
     forward,
-    individuals,
-    network_kl,
-    sgb_layers,
+    make_agent,
     tanh_gaussian_entropy,
     tanh_gaussian_log_prob,
 )
-from sgb.rl.normalizer import init_normalizer, normalize, update
+from sgb.rl.envs import EnvSpec
+from sgb.rl.normalizer import init_normalizer, update
 from sgb.rl.population import population_returns
-from sgb.rl.ppo import _unroll, gae, init_state, train, train_iterations
+from sgb.rl.ppo import init_state, train
+from sgb.rl.trainer import make_trainer
 
 
 @pytest.mark.parametrize(
@@ -78,17 +74,21 @@ def test_the_training_step_compiles_once_for_runs_that_differ_only_outside_it():
         num_evals=3,
         eval_individuals=2,
     )
-    before = train_iterations._cache_size()
     train(config, seed=0, progress=False)
-    assert train_iterations._cache_size() == before + 1
+    trainer = make_trainer(config.step_settings())
+    assert trainer.iterations._cache_size() == 1
     # the initial spread, the length and the evaluations of a run do not enter the step
     wider = replace(network, rho_init=-1.0)
-    train(replace(config, network=wider, total_steps=64, num_evals=2, eval_individuals=3), 0, False)
-    assert train_iterations._cache_size() == before + 1
+    other = replace(config, network=wider, total_steps=64, num_evals=2, eval_individuals=3)
+    train(other, 0, False)
+    assert make_trainer(other.step_settings()) is trainer
+    assert trainer.iterations._cache_size() == 1
+    # a setting the step reads is a trainer of its own
+    assert make_trainer(replace(config, clip=0.2).step_settings()) is not trainer
 
 
-def _noise(model, params, keys):
-    return jax.vmap(lambda k: draw_noise(model, params, k))(keys)
+def _actor(config):
+    return make_agent(config.network, 2, 1).actor
 
 
 def _sgb_params(rho_init=-1.0):
@@ -99,10 +99,10 @@ def _sgb_params(rho_init=-1.0):
 
 def test_same_key_same_individual_and_return():
     config, ts = _sgb_params()
-    actor = MLP(config.network, 2, 2)
+    actor = _actor(config)
     keys = jax.random.split(jax.random.PRNGKey(0), 2)
-    a = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
-    b = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
+    a = actor.layers(ts.params.actor, jax.vmap(actor.draw)(keys))
+    b = actor.layers(ts.params.actor, jax.vmap(actor.draw)(keys))
     for (ka, _), (kb, _) in zip(a, b, strict=True):
         np.testing.assert_array_equal(ka, kb)
     assert not np.allclose(a[0][0][0], a[0][0][1])  # two keys, two individuals
@@ -152,32 +152,11 @@ def test_the_authors_figure_5_protocol_samples_actions():
 def test_ratio_is_one_for_the_collecting_individual():
     """Rebuilding each unroll's individual from its kept noise reproduces the behaviour policy."""
     config, ts = _sgb_params()
-    ts, data = _unroll(ts, config)
-    actor = MLP(config.network, 2, 2)
-    layers = individuals(actor, ts.params.actor, data.actor_noise)
-    loc, scale = action_distribution(forward(layers, normalize(ts.normalizer, data.obs)))
+    trainer = make_trainer(config.step_settings())
+    ts, data = trainer.unroll(ts)
+    layers = trainer.agent.actor.layers(ts.params.actor, data.individual.actor)
+    loc, scale = trainer.agent.policy(layers, ts.normalizer, data.obs)
     np.testing.assert_allclose(tanh_gaussian_log_prob(data.u, loc, scale), data.log_prob, atol=1e-4)
-
-
-def test_gae_matches_a_loop():
-    rng = np.random.default_rng(0)
-    t = 6
-    reward, value = rng.normal(size=(2, t))
-    next_value = np.append(value[1:], rng.normal())  # V(s_{t+1}), as the unroll gives it
-    done = np.array([0, 0, 1, 0, 0, 1.0])
-    trunc = np.array([0, 0, 0, 0, 0, 1.0])
-    adv, target = gae(*(jnp.asarray(x) for x in (reward, value, next_value, done, trunc)), 0.9, 0.8)
-    lambda_return, policy_adv = np.zeros(t), np.zeros(t)
-    for i in reversed(range(t)):
-        terminal = done[i] * (1 - trunc[i])
-        bootstrap = next_value[i] if i == t - 1 or done[i] else lambda_return[i + 1]
-        policy_adv[i] = reward[i] + 0.9 * (1 - terminal) * bootstrap - value[i]
-        # G_t = r_t + gamma * ((1 - lambda) V(s_{t+1}) + lambda G_{t+1}), cut at episode ends
-        following = next_value[i] if i == t - 1 or done[i] else lambda_return[i + 1]
-        mixed = (1 - 0.8) * next_value[i] + 0.8 * following
-        lambda_return[i] = reward[i] + 0.9 * (1 - terminal) * mixed
-    np.testing.assert_allclose(target, lambda_return, rtol=1e-5)
-    np.testing.assert_allclose(adv, policy_adv, rtol=1e-5)
 
 
 def test_normalizer_matches_numpy():
@@ -240,62 +219,53 @@ def test_bad_arguments_raise():
         train(reach_config(env=EnvSpec("no_such_env")), progress=False)
 
 
-def test_phenotype_agrees_with_the_sgb_layers():
-    """The mean network equals SGBDense's; sampled weights have each type pair's mean and std."""
-    config, ts = _sgb_params(rho_init=-2.0)
-    actor = MLP(config.network, 2, 2)
+def test_the_mean_network_runs_as_the_flax_layers_and_individuals_have_the_genomes_moments():
+    """The pure forward pass of the mean phenotype is the Flax definition's at sigma ~ 0;
+    the synapses of a type pair in 4,000 individuals have the pair's mean and spread; the
+    noise of two layers is independent."""
+    network = NetworkConfig(hidden=(32, 32), cell_types=4, rho_init=-2.0)
+    actor = make_agent(network, 2, 1).actor
+    params = actor.init(jax.random.PRNGKey(3), network)
+    tables = genome.of_params(params)
     x = jax.random.normal(jax.random.PRNGKey(5), (7, 2))
-    layers = individuals(actor, ts.params.actor, None)
-    expected = actor.apply(ts.params.actor, x, mean_network=True)
-    np.testing.assert_allclose(forward(layers, x), expected, rtol=1e-5, atol=1e-6)
+    still = {name: g._replace(rho=jnp.full_like(g.rho, -30.0)) for name, g in tables.items()}
+    flax_out = MLP(network, 2, 2).apply(
+        genome.with_tables(params, still), x, rngs={"sample": jax.random.PRNGKey(0)}
+    )
+    np.testing.assert_allclose(forward(actor.layers(params, None), x), flax_out, atol=1e-5)
     keys = jax.random.split(jax.random.PRNGKey(6), 4000)
-    layers = individuals(actor, ts.params.actor, _noise(actor, ts.params.actor, keys))
-    genome = ts.params.actor["params"]["hidden_1"]["genome"]
-    w = np.asarray(layers[1][0])[:, :8, :8]  # the (type 0, type 0) block of the 32x32 layer
-    np.testing.assert_allclose(w.mean(), genome["mu"][0, 0], atol=3e-3)
-    np.testing.assert_allclose(w.std(), jax.nn.softplus(genome["rho"][0, 0]), rtol=2e-2)
+    noise = jax.vmap(actor.draw)(keys)
+    w = np.asarray(actor.layers(params, noise)[1][0])[:, :8, :8]  # (type 0, type 0) block
+    n, sigma = w.size, float(genome.sigma(tables["hidden_1"])[0, 0])
+    assert abs(w.mean() - float(tables["hidden_1"].mu[0, 0])) < 4 * sigma / np.sqrt(n)
+    assert abs(w.std() - sigma) < 4 * sigma / np.sqrt(2 * (n - 1))
+    first, second = np.asarray(noise["hidden_0"][:, 0, 0]), np.asarray(noise["hidden_1"][:, 0, 0])
+    assert abs(np.corrcoef(first, second)[0, 1]) < 4 / np.sqrt(len(keys))
 
 
-@pytest.mark.parametrize(
-    ("prior", "typed_sgb_out"), [("mixture", False), ("gaussian", False), ("gaussian", True)]
-)
-def test_rl_and_layer_paths_draw_the_same_individual(prior, typed_sgb_out):
-    """From the same key, the RL phenotype has the SGB layers' kernels and outputs; the
-    network's KL is the layers' (exactly for the Gaussian prior, on average over keys
-    for the mixture, whose per-pair draws come from other keys)."""
+@pytest.mark.parametrize("prior", ["mixture", "gaussian"])
+def test_the_agents_kl_is_the_flax_layers_kl(prior):
+    """The agent's genome KL equals what the SGB layers sow (exactly for the Gaussian prior,
+    on average over keys for the mixture, whose Monte Carlo draws come from other keys)."""
     network = NetworkConfig(
         hidden=(32, 16),
         cell_types=4,
         rho_init=-1.0,
         prior=prior,
-        typed_inputs=typed_sgb_out,
-        sgb_output=typed_sgb_out,
+        typed_inputs=True,
+        sgb_output=True,
     )
-    actor = MLP(network, 2, 3)
-    params = init_params(actor, jax.random.PRNGKey(0), jnp.zeros((1, 3)))
-    keys = jax.random.split(jax.random.PRNGKey(1), 3)
-    layers = individuals(actor, params, _noise(actor, params, keys))
-    names = list(sgb_layers(actor))
-    assert names == ["hidden_0", "hidden_1"] + ["out"] * typed_sgb_out
-    x = jax.random.normal(jax.random.PRNGKey(2), (5, 3))
-    for i, key in enumerate(keys):
-        out, state = actor.apply(params, x, rngs={"sample": key}, mutable=["individual", "losses"])
-        for j, name in enumerate(names):
-            kernel = state["individual"][name]["genome"]["kernel"]
-            np.testing.assert_allclose(layers[j][0][i], kernel, rtol=1e-6, atol=1e-7)
-        np.testing.assert_allclose(
-            forward([(k[i] if k.ndim == 3 else k, b) for k, b in layers], x),
-            out,
-            rtol=1e-5,
-            atol=1e-6,
-        )
+    actor = make_agent(network, 3, 1).actor
+    params = actor.init(jax.random.PRNGKey(0), network)
+    assert list(actor.sgb_shapes) == ["hidden_0", "hidden_1", "out"]
+    x = jnp.zeros((1, 3))
 
     def layers_kl(key):
-        _, state = actor.apply(params, x, rngs={"sample": key}, mutable=["losses"])
-        return sum(state["losses"][name]["genome"]["kl"] for name in names)
+        _, state = MLP(network, 2, 3).apply(params, x, rngs={"sample": key}, mutable=["losses"])
+        return sum(genome.sown(state["losses"], "kl").values())
 
     many = jax.random.split(jax.random.PRNGKey(3), 2000)
-    ours = jax.vmap(lambda k: network_kl(actor, params, k))(many)
+    ours = jax.vmap(lambda k: actor.kl(params, k))(many)
     theirs = jax.vmap(layers_kl)(many)
     if prior == "gaussian":
         np.testing.assert_allclose(ours, theirs, rtol=1e-5)
@@ -313,16 +283,15 @@ def test_the_authors_network_types_every_layer_and_draws_means_from_n_0_01():
         mean_init=0.1,
         rho_init=-7.0,
     )
-    params = init_params(MLP(network, 16, 27), jax.random.PRNGKey(0), jnp.zeros((1, 27)))["params"]
-    assert params["hidden_0"]["genome"]["mu"].shape == (27, 64)  # more types than inputs
-    assert params["out"]["genome"]["mu"].shape == (64, 16)  # one type per output neuron
-    mu = np.asarray(params["hidden_1"]["genome"]["mu"])
-    np.testing.assert_allclose(mu.std(), 0.1, rtol=0.05)
-    sigma = jax.nn.softplus(params["out"]["genome"]["rho"])
+    tables = genome.of_params(make_agent(network, 27, 8).actor.init(jax.random.PRNGKey(0), network))
+    assert tables["hidden_0"].mu.shape == (27, 64)  # more types than inputs
+    assert tables["out"].mu.shape == (64, 16)  # one type per output neuron
+    np.testing.assert_allclose(np.asarray(tables["hidden_1"].mu).std(), 0.1, rtol=0.05)
+    sigma = genome.sigma(tables["out"])
     np.testing.assert_allclose(sigma, np.log1p(np.exp(-7.0)), rtol=1e-6)
     small = replace(network, cell_types=16)
-    params = init_params(MLP(small, 16, 27), jax.random.PRNGKey(0), jnp.zeros((1, 27)))["params"]
-    assert params["hidden_0"]["genome"]["mu"].shape == (16, 16)  # 27 inputs in 16 types
+    tables = genome.of_params(make_agent(small, 27, 8).actor.init(jax.random.PRNGKey(0), small))
+    assert tables["hidden_0"].mu.shape == (16, 16)  # 27 inputs in 16 types
 
 
 def test_tanh_entropy_estimate_is_the_mean_negative_log_density():
@@ -346,13 +315,12 @@ def test_tanh_entropy_estimate_is_the_mean_negative_log_density():
 def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one(
     tmp_path, monkeypatch
 ):
-    from sgb.rl import ppo
-
     one_chunk = shared_step_config()
     config = replace(one_chunk, total_steps=3 * one_chunk.total_steps, num_evals=3)
     uninterrupted = train(config, seed=2, progress=False)
     state_file = tmp_path / "run.state.npz"
-    real, calls = ppo.train_iterations, []
+    trainer = make_trainer(config.step_settings())
+    real, calls = trainer.iterations, []
 
     def killed_at_the_second_chunk(*args, **kwargs):
         calls.append(1)
@@ -360,10 +328,10 @@ def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one
             raise KeyboardInterrupt
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(ppo, "train_iterations", killed_at_the_second_chunk)
+    monkeypatch.setitem(trainer.__dict__, "iterations", killed_at_the_second_chunk)
     with pytest.raises(KeyboardInterrupt):
         train(config, seed=2, progress=False, state_file=state_file)
-    monkeypatch.setattr(ppo, "train_iterations", real)
+    monkeypatch.setitem(trainer.__dict__, "iterations", real)
     resumed = train(config, seed=2, progress=False, state_file=state_file)
     assert resumed.eval_steps == uninterrupted.eval_steps
     np.testing.assert_array_equal(resumed.eval_returns, uninterrupted.eval_returns)

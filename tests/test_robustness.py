@@ -20,11 +20,11 @@ from sgb.data import digits
 from sgb.dgb import DGBConfig
 from sgb.divergence import BLOWUP_FACTOR, FIT_BOUND, TrainingDiverged
 from sgb.experiments.rl import finished_run
-from sgb.layers import genome_kl, individual_kernel, softplus
+from sgb.genome import individual_kernel, layer_kl, softplus
 from sgb.priors import GaussianPrior
 from sgb.provenance import read_results
 from sgb.rl import checkpoints, ppo
-from sgb.rl.networks import MLP, NetworkConfig
+from sgb.rl.agent import MLP, NetworkConfig
 from sgb.rl.normalizer import Normalizer, init_normalizer
 from sgb.rl.population import population_returns
 from sgb.supervised import (
@@ -158,7 +158,7 @@ def test_a_damaged_dataset_copy_falls_through_to_a_good_one(tmp_path, monkeypatc
 def _result(config=None, seed=0):
     """A PPO result on the Reach environment, untrained (its initial parameters)."""
     config = config or reach_config(4)
-    params = ppo.init_params(config, seed=seed)
+    params = ppo.initial_params(config, seed=seed)
     norm = init_normalizer(2)._replace(count=jnp.asarray(5.0), m2=jnp.ones(2))
     return ppo.TrainResult(config, params, norm, [100, 200], [-20.5, -18.25], 1e3, 2.0)
 
@@ -397,7 +397,7 @@ def test_one_softplus_keeps_todays_values_and_never_overflows():
     big = jnp.full((2, 3), 100.0)  # log1p(exp(100)) was inf
     assert jnp.all(jnp.isfinite(individual_kernel(mu, big, noise)))
     assert all(jnp.all(jnp.isfinite(g)) for g in jax.grad(loss, argnums=(0, 1))(mu, big))
-    kl = genome_kl(GaussianPrior(0.1), mu, softplus(big), (4, 6), "synapse", jax.random.key(0))
+    kl = layer_kl(GaussianPrior(0.1), mu, softplus(big), (4, 6), "synapse", jax.random.key(0))
     assert jnp.isfinite(kl)
 
 
@@ -424,12 +424,12 @@ def test_evaluation_and_entry_points_check_their_inputs():
         train_and_evaluate(DenseConfig(hidden=(8,)), ds._replace(x_train=ds.x_train[:0]))
     for call in (
         lambda: data.load("digits", seed=2.5),
-        lambda: ppo.init_params(reach_config(), 2.5),
+        lambda: ppo.initial_params(reach_config(), 2.5),
     ):
         with pytest.raises(TypeError, match="seed must be an integer"):
             call()
     network = NetworkConfig(hidden=(8,))
-    params = ppo.init_params(reach_config(network=network), 0).actor
+    params = ppo.initial_params(reach_config(network=network), 0).actor
     with pytest.raises(ValueError, match=r"normalizer.mean must have shape \(2,\)"):
         population_returns(SPEC, network, params, init_normalizer(3), 2, 1, 4)
     with pytest.raises(ValueError, match="actor_params.*nan"):

@@ -5,7 +5,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from sgb import theory
+from sgb import genome, theory
 from sgb.experiments import theory as experiment
 from sgb.population import individual_kernels
 from sgb.priors import GaussianPrior, ScaleMixturePrior
@@ -289,7 +289,7 @@ def test_genome_fixed_point_per_type_pair(counting):
     expected = block.mean() if counting == "synapse" else block.sum()
     np.testing.assert_allclose(layer.curvature[0, 0], expected, rtol=1e-5)
     np.testing.assert_allclose(layer.predicted, c / (layer.curvature + c / 0.1**2), rtol=1e-5)
-    rho = params["params"]["SGBDense_0"]["genome"]["rho"]
+    rho = genome.of_params(params)["SGBDense_0"].rho
     np.testing.assert_allclose(layer.sigma2, jax.nn.softplus(rho) ** 2, rtol=1e-6)
     with pytest.raises(ValueError):
         theory.genome_fixed_point(model.clone(prior=ScaleMixturePrior()), params, diag, c)
@@ -331,10 +331,7 @@ def test_synapse_view_reproduces_the_model():
         view.forward(view.mean, x), model.apply(params, x, mean_network=True), rtol=1e-5
     )
     key = jax.random.key(3)
-    kernels = {
-        name: layer["genome"]["kernel"]
-        for name, layer in individual_kernels(model, params, x, key).items()
-    }
+    kernels = individual_kernels(model, params, x, key)
     np.testing.assert_allclose(
         view.forward(kernels, x), model.apply(params, x, rngs={"sample": key}), rtol=1e-5
     )

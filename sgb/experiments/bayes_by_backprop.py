@@ -8,10 +8,11 @@ from typing import Any
 import jax
 import numpy as np
 
+from sgb import genome
 from sgb.compression import compression_ratio, dense_param_count, sgb_param_count
 from sgb.data import digits
 from sgb.experiments import check_profile
-from sgb.layers import SGBMLP, genome_tables
+from sgb.layers import SGBMLP
 from sgb.population import init_params
 from sgb.priors import GaussianPrior
 from sgb.provenance import provenance, results_file, write_results
@@ -119,7 +120,8 @@ def compare_classifiers(config: BBBConfig, progress: bool = True) -> dict[str, A
             variant = dataclasses.replace(variant, seed=seed)
             result = train_and_evaluate(variant, data, progress=progress)
             sizes = (data.x_train.shape[1], *variant.hidden, data.num_classes)
-            sigmas = {k: float(s.mean()) for k, (_, s) in genome_tables(result["params"]).items()}
+            tables = genome.of_params(result["params"])
+            sigmas = {k: float(genome.sigma(g).mean()) for k, g in tables.items()}
             rows.append(
                 {
                     "variant": name,

@@ -22,8 +22,8 @@ from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.paths import committed_results
 from sgb.provenance import provenance, read_results, results_file, write_results
 from sgb.rl import checkpoints
+from sgb.rl.agent import NetworkConfig
 from sgb.rl.envs import EnvSpec
-from sgb.rl.networks import NetworkConfig
 from sgb.rl.normalizer import Normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig, train

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sgb import genome
 from sgb.experiments import check_profile
 from sgb.experiments.rl import (
     CHECKPOINT_DIR,
@@ -27,9 +28,8 @@ from sgb.experiments.rl import (
     sweep_config,
     trained_run,
 )
-from sgb.layers import genome_tables, softplus
 from sgb.provenance import provenance, results_file, write_results
-from sgb.rl.networks import NetworkConfig
+from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 
 
@@ -56,7 +56,9 @@ def spread_config(profile: str) -> SpreadConfig:
 
 def mean_sigma(actor_params: dict) -> float:
     """Mean sigma over every type pair of the actor's SGB hidden layers."""
-    return float(np.mean([np.mean(sigma) for _, sigma in genome_tables(actor_params).values()]))
+    return float(
+        np.mean([np.mean(genome.sigma(g)) for g in genome.of_params(actor_params).values()])
+    )
 
 
 def summarise_spread(runs: list[dict]) -> list[dict]:
@@ -119,7 +121,7 @@ def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]
             runs.append(
                 {
                     "rho_init": rho,
-                    "sigma_init": float(softplus(rho)),
+                    "sigma_init": float(genome.softplus(rho)),
                     "seed": seed,
                     "checkpoint": name,
                     "sigma_trained": mean_sigma(actor),

@@ -19,7 +19,7 @@ from tqdm.auto import tqdm
 from sgb import theory
 from sgb.data import Dataset, digits
 from sgb.experiments import check_profile
-from sgb.layers import softplus
+from sgb.genome import softplus
 from sgb.provenance import provenance, results_file, write_results
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 

@@ -28,10 +28,10 @@ import numpy as np
 from flax import serialization
 
 from sgb.provenance import atomic_write
+from sgb.rl.agent import NetworkConfig, Params
 from sgb.rl.envs import EnvSpec
-from sgb.rl.networks import NetworkConfig
 from sgb.rl.normalizer import Normalizer
-from sgb.rl.ppo import Params, PPOConfig, TrainResult, init_params
+from sgb.rl.ppo import PPOConfig, TrainResult, initial_params
 from sgb.validation import RETRAIN, CorruptFile, finite_tree
 
 SIDECAR_HASH = "sidecar_sha256"
@@ -127,7 +127,7 @@ def load(path: str | Path) -> tuple[PPOConfig, Params, Normalizer, dict[str, Any
     except (ValueError, KeyError, TypeError) as error:
         raise CorruptFile(path, f"is unreadable ({error!r})", RETRAIN, "checkpoint") from error
     # the shapes the config describes, traced without computing (or compiling) anything
-    _check_shapes(path, params, jax.eval_shape(partial(init_params, config, seed=0)))
+    _check_shapes(path, params, jax.eval_shape(partial(initial_params, config, seed=0)))
     arrays = {"actor": params.actor, "critic": params.critic, "normalizer": state["normalizer"]}
     try:
         finite_tree("", arrays)

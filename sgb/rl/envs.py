@@ -26,11 +26,24 @@ Terrain (rough ground, stairs) needs height-field or mesh contacts; the
 niches are physical ones (friction and gravity).
 """
 
+import contextlib
 import functools
+import io
+import os
+import platform
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
-import brax.envs
+# MuJoCo's offscreen renderer (sgb.rl.render) needs a headless OpenGL; on Linux that is
+# EGL, chosen when mujoco is first imported, which Brax does.
+if platform.system() == "Linux":
+    os.environ.setdefault("MUJOCO_GL", "egl")
+
+# mujoco.mjx prints a line when its optional warp backend is absent, which it is here.
+with contextlib.redirect_stdout(io.StringIO()):
+    import mujoco.mjx  # noqa: F401, E402
+
+import brax.envs  # noqa: E402
 import jax
 import numpy as np
 from brax.io import mjcf

@@ -8,7 +8,6 @@ they are sampled from the policy, as in training (and in the authors' Figure 5).
 All N x episodes rollouts run in one jitted, vmapped call.
 """
 
-from dataclasses import replace
 from functools import partial
 
 import jax
@@ -17,21 +16,15 @@ import numpy as np
 
 from sgb import validation
 from sgb.noise import standard_normal
+from sgb.rl.agent import Architecture, NetworkConfig, make_agent
 from sgb.rl.envs import EnvSpec, make_env
-from sgb.rl.networks import (
-    MLP,
-    NetworkConfig,
-    action_distribution,
-    drawn_individuals,
-    forward,
-)
-from sgb.rl.normalizer import Normalizer, normalize
+from sgb.rl.normalizer import Normalizer
 
 
-@partial(jax.jit, static_argnames=("spec", "network", "episode_length"))
+@partial(jax.jit, static_argnames=("spec", "architecture", "episode_length"))
 def _returns(
     spec: EnvSpec,
-    network: NetworkConfig,
+    architecture: Architecture,
     actor_params: dict,
     normalizer: Normalizer,
     ind_keys: jax.Array | None,
@@ -43,14 +36,14 @@ def _returns(
     or every row by the mean network when ``ind_keys`` is None. Actions are tanh of the
     Gaussian mean, or sampled with ``action_key`` when it is given."""
     env = make_env(spec)
-    actor = MLP(network, 2 * env.action_size, env.observation_size)
-    layers = drawn_individuals(actor, actor_params, ind_keys)
+    agent = make_agent(architecture, env.observation_size, env.action_size)
+    noise = None if ind_keys is None else jax.vmap(agent.actor.draw)(ind_keys)
+    layers = agent.actor.layers(actor_params, noise)
     state = jax.vmap(jax.vmap(env.reset))(reset_keys)
 
     def step(carry, t):
         state, total, alive = carry
-        logits = forward(layers, normalize(normalizer, state.obs))
-        loc, scale = action_distribution(logits)
+        loc, scale = agent.policy(layers, normalizer, state.obs)
         if action_key is not None:
             loc = loc + scale * standard_normal(jax.random.fold_in(action_key, t), loc.shape)
         state = jax.vmap(jax.vmap(env.step))(state, jnp.tanh(loc))
@@ -62,16 +55,6 @@ def _returns(
     carry = (state, zeros, zeros + 1.0)
     (_, total, _), _ = jax.lax.scan(step, carry, jnp.arange(episode_length))
     return total
-
-
-def compiled_network(network: NetworkConfig) -> NetworkConfig:
-    """``network`` as the compiled rollouts and training steps see it.
-
-    ``rho_init`` and ``mean_init`` are read only when parameters are initialised, never
-    by a step that is given them, so they are set to their defaults: networks that differ
-    only in their initialisation share one compilation.
-    """
-    return replace(network, rho_init=NetworkConfig.rho_init, mean_init=NetworkConfig.mean_init)
 
 
 def check_normalizer(normalizer: Normalizer, size: int) -> Normalizer:
@@ -146,7 +129,7 @@ def population_returns(
     ind_keys, reset_keys = _keys(n_individuals, episodes, seed)
     total = _returns(
         spec,
-        compiled_network(network),
+        network.architecture,
         actor_params,
         normalizer,
         None if mean_network else ind_keys,

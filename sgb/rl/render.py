@@ -1,6 +1,6 @@
 """Pictures of Brax bodies with MuJoCo's offscreen renderer: still images and walking GIFs.
 
-MuJoCo renders through a headless OpenGL (EGL on Linux, see ``sgb.rl``). Frames are
+MuJoCo renders through a headless OpenGL (EGL on Linux, see ``sgb.rl.envs``). Frames are
 RGB arrays of shape (height, width, 3), uint8.
 """
 
@@ -15,9 +15,9 @@ import numpy as np
 from PIL import Image
 
 from sgb.rl import checkpoints
+from sgb.rl.agent import Architecture, make_agent
 from sgb.rl.envs import EnvSpec, make_env, variant_xml
-from sgb.rl.networks import MLP, NetworkConfig, action_distribution, drawn_individuals, forward
-from sgb.rl.normalizer import Normalizer, normalize
+from sgb.rl.normalizer import Normalizer
 
 CAMERA = "track"  # the Ant's camera, following its centre of mass from the side
 
@@ -52,10 +52,10 @@ def initial_pose(spec: EnvSpec, width: int = 320, height: int = 240) -> np.ndarr
     return render_poses(spec, np.asarray(qpos)[None], width, height)[0]
 
 
-@functools.partial(jax.jit, static_argnames=("spec", "network", "steps"))
+@functools.partial(jax.jit, static_argnames=("spec", "architecture", "steps"))
 def _trajectories(
     spec: EnvSpec,
-    network: NetworkConfig,
+    architecture: Architecture,
     actor_params: dict,
     normalizer: Normalizer,
     ind_keys: jax.Array,
@@ -64,14 +64,13 @@ def _trajectories(
 ) -> jnp.ndarray:
     """Joint positions (N, steps + 1, nq) of N individuals from one shared initial state."""
     env = make_env(spec)
-    actor = MLP(network, 2 * env.action_size, env.observation_size)
-    layers = drawn_individuals(actor, actor_params, ind_keys)
+    agent = make_agent(architecture, env.observation_size, env.action_size)
+    layers = agent.actor.layers(actor_params, jax.vmap(agent.actor.draw)(ind_keys))
     n = ind_keys.shape[0]
     state = jax.vmap(env.reset)(jnp.broadcast_to(reset_key, (n, *reset_key.shape)))
 
     def step(state, _):
-        logits = forward(layers, normalize(normalizer, state.obs))
-        loc, _ = action_distribution(logits)
+        loc, _ = agent.policy(layers, normalizer, state.obs)
         state = jax.vmap(env.step)(state, jnp.tanh(loc))
         return state, state.pipeline_state.q
 
@@ -102,7 +101,9 @@ def walking_frames(
     ppo, params, normalizer, _ = checkpoints.load(checkpoint)
     ind_key, reset_key = jax.random.split(jax.random.PRNGKey(seed))
     keys = jax.random.split(ind_key, n_individuals)
-    qpos = _trajectories(ppo.env, ppo.network, params.actor, normalizer, keys, reset_key, steps)
+    qpos = _trajectories(
+        ppo.env, ppo.network.architecture, params.actor, normalizer, keys, reset_key, steps
+    )
     qpos = np.asarray(qpos)[:, ::every]
     panels = [render_poses(ppo.env, q, width, height) for q in qpos]
     return np.concatenate(panels, axis=2)

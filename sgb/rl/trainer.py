@@ -1,0 +1,218 @@
+"""The PPO training step, built once per ``StepSettings`` (``make_trainer``).
+
+One training iteration:
+
+1. *Births.* Every parallel environment whose episode ended during the last
+   unroll is reset, and a new individual is born for it from a fresh PRNG key
+   (``sgb.rl.agent.Agent.birth``): the weight noise of its actor and critic,
+   kept for its whole life. So an individual lives exactly one episode, and each
+   of the ``num_envs`` environments runs its own individual.
+2. *Unroll.* Each environment runs ``unroll_length`` steps. Actions are
+   tanh(u), u ~ N(loc, scale) from the individual's policy. An environment
+   whose episode ends waits, masked out, until the unroll is over (no
+   auto-reset), so one unroll of one environment is always played by one
+   individual. Episodes are cut at ``episode_length`` steps (truncation:
+   the value of the last state is bootstrapped).
+3. *Update.* ``num_epochs`` passes over the unrolls in ``num_minibatches``
+   minibatches of environments, each a step of Adam on ``sgb.rl.losses.ppo_loss``.
+
+``StepSettings`` is the part of a run's settings that an iteration reads: runs that
+differ only in the rest (their length, their evaluations, how their genome starts)
+share one ``Trainer`` and its compiled step, and the step cannot read what it is not
+given.
+"""
+
+from dataclasses import dataclass
+from functools import cache, cached_property
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import optax
+
+from sgb import validation
+from sgb.noise import standard_normal
+from sgb.rl.agent import Agent, Architecture, Individual, Params, make_agent, tanh_gaussian_log_prob
+from sgb.rl.envs import EnvSpec, make_env
+from sgb.rl.losses import LossSettings, Unroll, ppo_loss
+from sgb.rl.normalizer import Normalizer, update
+
+
+@dataclass(frozen=True)
+class StepSettings:
+    """What a training iteration reads: ``PPOConfig`` less the run's length, its
+    evaluations and the genome's initial values (``NetworkConfig.rho_init``, ``mean_init``)."""
+
+    env: EnvSpec
+    architecture: Architecture
+    num_envs: int
+    unroll_length: int
+    num_minibatches: int
+    num_epochs: int
+    learning_rate: float
+    episode_length: int
+    loss: LossSettings
+
+
+class TrainState(NamedTuple):
+    params: Params
+    opt_state: optax.OptState
+    normalizer: Normalizer
+    env_state: object
+    steps: jnp.ndarray  # (E,) steps into the current episode
+    finished: jnp.ndarray  # (E,) 1.0 where the episode ended
+    individual: Individual  # each environment's player, leading axis E; None for vanilla
+    key: jax.Array
+
+
+@dataclass(frozen=True, eq=False)
+class Trainer:
+    """The environment, agent and optimizer of one ``StepSettings``, built once
+    (``make_trainer``), and its jitted steps."""
+
+    settings: StepSettings
+
+    @cached_property
+    def env(self):
+        return make_env(self.settings.env)
+
+    @cached_property
+    def agent(self) -> Agent:
+        env = self.env
+        return make_agent(self.settings.architecture, env.observation_size, env.action_size)
+
+    @cached_property
+    def optimizer(self) -> optax.GradientTransformation:
+        return optax.adam(self.settings.learning_rate)
+
+    def births(self, individual: Individual, fresh: jnp.ndarray, key: jax.Array) -> Individual:
+        """``individual`` with a newborn in every ``fresh`` environment, born from
+        ``split(key, num_envs)[i]`` for environment i. Only newborns draw, one after
+        another; the others keep their noise."""
+        e = self.settings.num_envs
+        if not self.settings.architecture.sgb:
+            return individual
+        keys = jax.random.split(key, e)
+        born = jnp.nonzero(fresh, size=e, fill_value=0)[0]
+
+        def renew(j, noise):
+            i = born[j]
+            new = self.agent.birth(keys[i])
+            return jax.tree_util.tree_map(lambda n, d: n.at[i].set(d), noise, new)
+
+        # in place, over the newborns only: the others cost nothing
+        return jax.lax.fori_loop(0, jnp.sum(fresh), renew, individual)
+
+    @cached_property
+    def first_births(self):
+        """Jitted: every environment's first individual, from a key."""
+        e = self.settings.num_envs
+        empty = jax.eval_shape(
+            jax.vmap(self.agent.birth), jax.random.split(jax.random.PRNGKey(0), e)
+        )
+
+        def first(key):
+            zeros = jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), empty)
+            return self.births(zeros, jnp.ones(e, bool), key)
+
+        return jax.jit(first)
+
+    def unroll(self, ts: TrainState) -> tuple[TrainState, Unroll]:
+        env, agent, s = self.env, self.agent, self.settings
+        key, k_reset, k_birth, k_act = jax.random.split(ts.key, 4)
+        e = s.num_envs
+        fresh = ts.finished > 0
+
+        def reset(env_state):
+            resets = jax.vmap(env.reset)(jax.random.split(k_reset, e))
+
+            def pick(new, old):
+                return jnp.where(fresh.reshape((e,) + (1,) * (old.ndim - 1)), new, old)
+
+            return jax.tree_util.tree_map(pick, resets, env_state)
+
+        env_state = jax.lax.cond(jnp.any(fresh), reset, lambda state: state, ts.env_state)
+        individual = self.births(ts.individual, fresh, k_birth)
+        steps = jnp.where(fresh, 0.0, ts.steps)
+        actor = agent.actor.layers(ts.params.actor, individual.actor)
+
+        def step(carry, k):
+            state, steps, finished = carry
+            loc, scale = agent.policy(actor, ts.normalizer, state.obs)
+            u = loc + scale * standard_normal(k, loc.shape)
+            log_prob = tanh_gaussian_log_prob(u, loc, scale)
+            nstate = jax.vmap(env.step)(state, jnp.tanh(u))
+            steps = steps + 1.0
+            truncation = jnp.where(steps >= s.episode_length, 1.0 - nstate.done, 0.0)
+            done = jnp.maximum(nstate.done, truncation)
+            valid = 1.0 - finished
+            out = (state.obs, u, log_prob, nstate.reward, done, truncation, valid)
+            return (nstate, steps, jnp.maximum(finished, done)), out
+
+        carry = (env_state, steps, jnp.zeros(e))
+        keys = jax.random.split(k_act, s.unroll_length)
+        (env_state, steps, finished), out = jax.lax.scan(step, carry, keys)
+        out = [jnp.swapaxes(x, 0, 1) for x in out]
+        data = Unroll(*out, last_obs=env_state.obs, individual=individual)
+        ts = ts._replace(
+            env_state=env_state, steps=steps, finished=finished, individual=individual, key=key
+        )
+        return ts, data
+
+    def sgd(self, ts: TrainState, data: Unroll) -> tuple[TrainState, dict]:
+        s = self.settings
+        key, k_perm = jax.random.split(ts.key)
+        grad_fn = jax.value_and_grad(ppo_loss, has_aux=True)
+
+        def minibatch(carry, xs):
+            params, opt_state = carry
+            idx, k = xs
+            batch = jax.tree_util.tree_map(lambda x: x[idx], data)
+            (_, metrics), grads = grad_fn(params, batch, ts.normalizer, k, self.agent, s.loss)
+            updates, opt_state = self.optimizer.update(grads, opt_state, params)
+            return (optax.apply_updates(params, updates), opt_state), metrics
+
+        def epoch(carry, k):
+            k_perm, k_entropy = jax.random.split(k)
+            perm = jax.random.permutation(k_perm, s.num_envs)
+            keys = jax.random.split(k_entropy, s.num_minibatches)
+            return jax.lax.scan(minibatch, carry, (perm.reshape(s.num_minibatches, -1), keys))
+
+        carry = (ts.params, ts.opt_state)
+        (params, opt_state), metrics = jax.lax.scan(
+            epoch, carry, jax.random.split(k_perm, s.num_epochs)
+        )
+        metrics = jax.tree_util.tree_map(jnp.mean, metrics)
+        return ts._replace(params=params, opt_state=opt_state, key=key), metrics
+
+    @cached_property
+    def iterations(self):
+        """Jitted ``(ts, n) -> (ts, metrics)``: ``n`` PPO iterations (unroll, normaliser
+        update, SGD) in one call; the metrics of every iteration, shape (n,) each."""
+
+        def run(ts: TrainState, n: int):
+            def body(ts, _):
+                ts, data = self.unroll(ts)
+                ts = ts._replace(normalizer=update(ts.normalizer, data.obs, data.valid))
+                return self.sgd(ts, data)
+
+            ts, metrics = jax.lax.scan(body, ts, None, n)
+            # Brax's step returns a few weakly typed leaves; strong types keep the next
+            # call's signature equal to this one's, so it does not compile again.
+            ts = ts._replace(env_state=jax.tree_util.tree_map(strong, ts.env_state))
+            return ts, metrics
+
+        return jax.jit(run, static_argnames="n")
+
+
+@cache
+def make_trainer(settings: StepSettings) -> Trainer:
+    """The one ``Trainer`` of ``settings``: every run with these settings shares its
+    compiled steps."""
+    validation.instance("settings", settings, StepSettings)
+    return Trainer(settings)
+
+
+def strong(x: jnp.ndarray) -> jnp.ndarray:
+    """``x`` with the same dtype but no weak type."""
+    return jnp.asarray(x, dtype=x.dtype)
