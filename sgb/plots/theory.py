@@ -266,6 +266,7 @@ def fixed_point(fixed_points: list[dict[str, Any]]):
                     s=6,
                     alpha=0.5,
                     color=color,
+                    rasterized=True,  # thousands of points: as vectors, megabytes of SVG
                     label=(
                         f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f}, "
                         f"log corr. {summary['log_correlation']:.2f}"
