@@ -16,8 +16,8 @@ import numpy as np
 import optax
 
 from sgb.elbo import cross_entropy, elbo_loss
+from sgb.individuals import init_params
 from sgb.layers import SGBMLP
-from sgb.population import init_params
 from sgb.provenance import package_versions
 
 SIZES = (784, 800, 800, 10)

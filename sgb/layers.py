@@ -7,7 +7,7 @@ independently from its type pair's Gaussian, using the ``"sample"`` PRNG stream,
 the means alone when ``mean_network=True``. The KL term of the layer is sown into
 the ``"losses"`` collection and the drawn kernel and its standard normal
 noise into ``"individual"`` (each apply replaces what an earlier one sowed).
-``sgb.population.init_params`` initialises a model's parameters alone.
+``sgb.individuals.init_params`` initialises a model's parameters alone.
 
 With as many types as neurons the layer is a Bayes-by-backprop layer; with one
 type per side, one distribution for the whole layer.

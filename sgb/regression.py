@@ -7,7 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sgb.population import apply_population
+from sgb.individuals import apply_population
 
 
 def toy_regression_data(

@@ -27,7 +27,7 @@ from sgb.data import Dataset, check_dataset
 from sgb.dgb import DGBConfig, train_dgb
 from sgb.elbo import cross_entropy
 from sgb.genome import KL_COUNTINGS, KLCounting
-from sgb.population import apply_mean_network, apply_population, init_params
+from sgb.individuals import apply_mean_network, apply_population, init_params
 from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
 from sgb.training import adam_state, cross_entropy_step, fit_elbo, train_loop
 

@@ -29,8 +29,8 @@ from sgb.celltypes import block_counts, expand_table, sum_blocks
 from sgb.divergence import check_trajectory
 from sgb.elbo import cross_entropy
 from sgb.genome import LayerGenome
+from sgb.individuals import individual_kernels
 from sgb.layers import SGBMLP
-from sgb.population import individual_kernels
 from sgb.priors import GaussianPrior
 
 Pytree = Any

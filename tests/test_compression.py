@@ -12,8 +12,8 @@ from sgb.compression import (
     sgb_param_count,
     tree_param_count,
 )
+from sgb.individuals import init_params
 from sgb.layers import SGBMLP
-from sgb.population import init_params
 
 
 def test_counts_match_the_parameters_flax_creates():

@@ -28,8 +28,8 @@ from hypothesis import strategies as st
 from sgb import compression, stats
 from sgb.celltypes import expand_table, type_sizes
 from sgb.elbo import elbo_loss
+from sgb.individuals import init_params
 from sgb.layers import SGBMLP, SGBDense
-from sgb.population import init_params
 from sgb.priors import GaussianPrior, ScaleMixturePrior
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig

@@ -7,8 +7,8 @@ import numpy as np
 
 from sgb import genome
 from sgb.celltypes import expand_table
+from sgb.individuals import individual_kernels, init_params
 from sgb.layers import SGBMLP
-from sgb.population import individual_kernels, init_params
 from sgb.priors import GaussianPrior
 
 SHAPES = {"SGBDense_0": (12, 8), "SGBDense_1": (8, 4)}

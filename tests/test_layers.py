@@ -8,17 +8,17 @@ from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blo
 from sgb.compression import tree_param_count
 from sgb.elbo import elbo_loss, sown_kl
 from sgb.genome import LayerGenome, individual_kernel, layer_kl, of_params, with_tables
+from sgb.individuals import (
+    apply_mean_network,
+    apply_population,
+    individual_kernels,
+    init_params,
+)
 from sgb.layers import (
     SGBMLP,
     SGBConv,
     SGBDense,
     individual_matmul,
-)
-from sgb.population import (
-    apply_mean_network,
-    apply_population,
-    individual_kernels,
-    init_params,
 )
 from sgb.priors import GaussianPrior, ScaleMixturePrior
 

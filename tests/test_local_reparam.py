@@ -9,8 +9,8 @@ from sgb.celltypes import expand_table
 from sgb.elbo import cross_entropy, sown_kl
 from sgb.genome import LayerGenome, of_params, with_tables
 from sgb.genome import sigma as layer_sigma
+from sgb.individuals import apply_mean_network, init_params
 from sgb.layers import SGBMLP, SGBDense, type_matmul
-from sgb.population import apply_mean_network, init_params
 from sgb.priors import GaussianPrior, ScaleMixturePrior
 
 KEYS = jax.random.split(jax.random.key(7), 4000)

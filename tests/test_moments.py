@@ -12,8 +12,8 @@ from sgb.celltypes import expand_table
 from sgb.data import load
 from sgb.experiments import fig2, mean_gap
 from sgb.genome import of_params, with_tables
+from sgb.individuals import apply_mean_network, apply_population, init_params
 from sgb.layers import SGBMLP
-from sgb.population import apply_mean_network, apply_population, init_params
 from sgb.provenance import read_results
 
 matplotlib.use("Agg")

@@ -352,3 +352,16 @@ def test_the_package_admits_colabs_preinstalled_versions_outside_the_stack():
                 f"pyproject's {requirement} would move Colab's {name} {colab[name]}"
             )
     assert {"numpy", "pandas", "scipy", "matplotlib", "scikit-learn"} <= set(kept)
+
+
+def test_the_readme_map_names_every_module_of_the_package():
+    modules = {
+        ".".join(path.relative_to(ROOT).with_suffix("").parts).removesuffix(".__init__")
+        for path in (ROOT / "sgb").rglob("*.py")
+        if path.name != "__main__.py"
+    }
+    readme = (ROOT / "README.md").read_text()
+    plots = re.search(r"`sgb\.plots` \| ([^\n]*)", readme).group(1)
+    named = {m for m in modules if f"`{m}`" in readme}
+    named |= {m for m in modules if m.startswith("sgb.plots.") and f"`{m[10:]}`" in plots}
+    assert sorted(modules - named) == []

@@ -20,7 +20,7 @@ def test_summary_divides_by_the_mean_vanilla_return():
         {"settings": "ours", "cell_types": 16, "seed": 1, "final_return": 150.0},
         {"settings": "authors", "cell_types": 16, "seed": 0, "final_return": 400.0},
     ]
-    rows = {(r["settings"], r["cell_types"]): r for r in rl.summarise_sweep(runs)}
+    rows = {(r["settings"], r["cell_types"]): r for r in rl.summarise_cell_types(runs)}
     assert rows["ours", None]["fraction"] == pytest.approx(1.0)
     assert rows["ours", 16]["fraction"] == pytest.approx(0.5)
     assert rows["ours", 16]["sem_fraction"] == pytest.approx(50.0 / 200.0)  # sem(50, 150) = 50

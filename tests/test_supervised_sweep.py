@@ -9,7 +9,7 @@ from sgb.compression import compression
 from sgb.data import Dataset, load
 from sgb.dgb import DGBConfig
 from sgb.experiments import fig2
-from sgb.experiments.fig2 import SweepConfig, crossovers, run_one, summarise_sweep
+from sgb.experiments.fig2 import CompressionSweep, crossovers, run_one, summarise_compression
 from sgb.provenance import read_results
 from sgb.supervised import ClassifierConfig, DenseConfig, dense_accuracy, train_dense
 
@@ -31,7 +31,7 @@ def test_summary_and_crossover_of_synthetic_records():
         for s, c, a in rows
         for seed in (0, 1)
     ]
-    summary = summarise_sweep(records)
+    summary = summarise_compression(records)
     assert summary["sgb"]["compression"] == [10.0, 100.0]
     np.testing.assert_allclose(summary["dgb"]["mean"], [0.905, 0.505])
     np.testing.assert_allclose(summary["dgb"]["sem"], [0.005, 0.005])
@@ -48,7 +48,7 @@ def test_conv_classifiers_run_on_images():
     y = rng.integers(0, 3, 32).astype(np.int32)
     data = Dataset("images", x, y, x, y, 3)
     assert dense_sizes(x.shape[1:], (4,), (12,), 3) == (64, 12, 3)
-    sweep = SweepConfig(
+    sweep = CompressionSweep(
         hidden=(12,),
         conv_features=(4,),
         in_types=8,

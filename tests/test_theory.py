@@ -7,7 +7,7 @@ import pytest
 
 from sgb import genome, theory
 from sgb.experiments import theory as experiment
-from sgb.population import individual_kernels
+from sgb.individuals import individual_kernels
 from sgb.priors import GaussianPrior, ScaleMixturePrior
 from sgb.provenance import read_results
 from sgb.supervised import ClassifierConfig, make_model

@@ -12,8 +12,8 @@ from sgb import genome
 from sgb.compression import compression_ratio, dense_param_count, sgb_param_count
 from sgb.data import digits
 from sgb.experiments import check_profile
+from sgb.individuals import init_params
 from sgb.layers import SGBMLP
-from sgb.population import init_params
 from sgb.priors import GaussianPrior
 from sgb.provenance import provenance, results_file, write_results
 from sgb.regression import gaussian_nll, predictive_bands, toy_regression_data

@@ -52,7 +52,7 @@ _RATIO_KEYS = {"ours": "compression", "authors": "compression_authors"}
 
 
 @dataclasses.dataclass(frozen=True)
-class SweepConfig:
+class CompressionSweep:
     """Innate accuracy against compression for SGB, DGB and the uncompressed network.
 
     The SGB's input and output layers have ``in_types`` and ``out_types``
@@ -89,7 +89,7 @@ class SweepConfig:
         validation.instance("dense", self.dense, DenseConfig)
 
 
-def sweep_cells(sweep: SweepConfig, sizes: tuple[int, ...]) -> list[tuple[str, int, int]]:
+def sweep_cells(sweep: CompressionSweep, sizes: tuple[int, ...]) -> list[tuple[str, int, int]]:
     """Every (model, setting, seed) of a sweep; the uncompressed network has setting 0."""
     cells = []
     for kind in sweep.models:
@@ -106,7 +106,7 @@ def sweep_cells(sweep: SweepConfig, sizes: tuple[int, ...]) -> list[tuple[str, i
     return cells
 
 
-def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: SweepConfig) -> dict:
+def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: CompressionSweep) -> dict:
     """Train one model and evaluate it innately; a flat record of the sweep."""
     start = time.perf_counter()
     shape = {"hidden": sweep.hidden, "conv_features": sweep.conv_features, "seed": seed}
@@ -143,7 +143,7 @@ def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: SweepConfi
     return record
 
 
-def summarise_sweep(
+def summarise_compression(
     records: list[dict], metric: str = "accuracy", convention: str = "ours"
 ) -> dict[str, dict[str, list]]:
     """Per model, sorted by compression under ``convention``: setting, compression, mean and
@@ -187,11 +187,11 @@ def sweep_summary(records: list[dict]) -> dict[str, Any]:
     for convention in CONVENTIONS:
         if not all(_RATIO_KEYS[convention] in r for r in records):
             continue
-        summary = summarise_sweep(records, convention=convention)
+        summary = summarise_compression(records, convention=convention)
         sgb_records = [r for r in records if r["model"] == "sgb"]
         out[convention] = {
             "summary": summary,
-            "summary_mean_network": summarise_sweep(sgb_records, "mean_network", convention),
+            "summary_mean_network": summarise_compression(sgb_records, "mean_network", convention),
             "crossovers": crossovers(summary) if {"sgb", "dgb"} <= set(summary) else [],
         }
     return out
@@ -206,8 +206,8 @@ _DGB = DGBConfig(rounds=100, pnet_steps=10, gnet_steps=50, batch_size=64, valida
 _MLP_RATIOS = (2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
 
 
-def _small_data_sweep(epochs: int) -> SweepConfig:
-    return SweepConfig(
+def _small_data_sweep(epochs: int) -> CompressionSweep:
+    return CompressionSweep(
         ratios=_MLP_RATIOS,
         seeds=(0, 1, 2),
         hidden=(800,),
@@ -219,7 +219,7 @@ def _small_data_sweep(epochs: int) -> SweepConfig:
     )
 
 
-def _ablation(sweep: SweepConfig) -> SweepConfig:
+def _ablation(sweep: CompressionSweep) -> CompressionSweep:
     """The same SGB sweep at its lowest and highest ratio, two seeds, the KL counted the
     other way (per synapse <-> per type pair)."""
     other = "table" if sweep.sgb.kl_counting == "synapse" else "synapse"
@@ -241,8 +241,8 @@ _SGB_IMAGES = dataclasses.replace(
 )
 
 
-def _image_sweep(seeds: tuple[int, ...], epochs: int, dgb: DGBConfig) -> SweepConfig:
-    return SweepConfig(
+def _image_sweep(seeds: tuple[int, ...], epochs: int, dgb: DGBConfig) -> CompressionSweep:
+    return CompressionSweep(
         ratios=_IMAGE_RATIOS,
         seeds=seeds,
         hidden=(800,),
@@ -262,7 +262,7 @@ _IMAGE_CPU = _image_sweep(
     DGBConfig(rounds=100, pnet_steps=30, gnet_steps=50, batch_size=100, validation_size=5000),
 )
 _IMAGE_PAPER = _image_sweep((0, 1, 2, 3, 4), 50, DGBConfig(rounds=500, gnet_steps=600))
-_SMOKE = SweepConfig(
+_SMOKE = CompressionSweep(
     ratios=(4.0, 30.0),
     seeds=(0,),
     hidden=(64,),
@@ -270,7 +270,7 @@ _SMOKE = SweepConfig(
     dgb=dataclasses.replace(_DGB, rounds=5, pnet_steps=10, gnet_steps=10),
     dense=DenseConfig(epochs=3),
 )
-_CIFAR_PAPER = SweepConfig(
+_CIFAR_PAPER = CompressionSweep(
     ratios=(20.0, 50.0, 100.0, 200.0, 500.0, 1000.0, 1700.0),
     seeds=(0, 1, 2, 3, 4),
     hidden=(256, 128),
@@ -283,7 +283,7 @@ _CIFAR_PAPER = SweepConfig(
 )
 
 # profile -> dataset -> (sweep, KL ablation or None)
-PROFILES: dict[str, dict[str, tuple[SweepConfig, SweepConfig | None]]] = {
+PROFILES: dict[str, dict[str, tuple[CompressionSweep, CompressionSweep | None]]] = {
     "smoke": {name: (_SMOKE, None) for name in ("digits", "mnist1d")},
     "cpu": {
         "digits": (_small_data_sweep(10), _ablation(_small_data_sweep(10))),

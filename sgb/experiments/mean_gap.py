@@ -40,8 +40,8 @@ from sgb.classifiers import dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.experiments import check_profile, fig2
-from sgb.experiments.fig2 import SweepConfig
-from sgb.population import init_params
+from sgb.experiments.fig2 import CompressionSweep
+from sgb.individuals import init_params
 from sgb.provenance import (
     earlier_results,
     git_commit,
@@ -63,14 +63,14 @@ class MeanGapConfig:
     each for every seed of ``seeds``."""
 
     dataset: str = "fashion-mnist"
-    sweep: SweepConfig = fig2.PROFILES["cpu"]["fashion-mnist"][0]
+    sweep: CompressionSweep = fig2.PROFILES["cpu"]["fashion-mnist"][0]
     ratios: tuple[float, ...] = (10.0, 400.0)
     other_rho_init: float = -7.0
     other_rho_ratios: tuple[float, ...] = (10.0,)
     seeds: tuple[int, ...] = (0, 1, 2)
 
     def __post_init__(self) -> None:
-        validation.instance("sweep", self.sweep, SweepConfig)
+        validation.instance("sweep", self.sweep, CompressionSweep)
         if self.sweep.conv_features:
             raise ValueError("the moment-matched network covers SGB MLPs, not conv trunks")
         if not self.ratios:
@@ -96,7 +96,9 @@ def cells(config: MeanGapConfig, sizes: tuple[int, ...]) -> list[tuple[int, floa
     return [(s, rho, seed) for seed in config.seeds for s, rho in pairs]
 
 
-def cell_config(sweep: SweepConfig, setting: int, seed: int, rho_init: float) -> ClassifierConfig:
+def cell_config(
+    sweep: CompressionSweep, setting: int, seed: int, rho_init: float
+) -> ClassifierConfig:
     """The SGB config Figure 2's ``run_one`` trains for ``setting`` and ``seed``, from
     ``rho_init``."""
     types = (sweep.in_types, *([setting] * len(sweep.hidden)), sweep.out_types)
@@ -146,7 +148,9 @@ def _hidden_activations(params: Any, x: np.ndarray) -> list[dict[str, float]]:
     ]
 
 
-def run_cell(setting: int, rho_init: float, seed: int, data: Dataset, sweep: SweepConfig) -> dict:
+def run_cell(
+    setting: int, rho_init: float, seed: int, data: Dataset, sweep: CompressionSweep
+) -> dict:
     """Train one SGB cell as Figure 2's sweep does (``train_and_evaluate``) and evaluate
     its individuals, mean network and moment-matched network; a flat record."""
     start_time = time.perf_counter()

@@ -51,7 +51,7 @@ class SweepPoint:
 
 
 @dataclass(frozen=True)
-class SweepConfig:
+class CellTypeSweep:
     """Figure 3: the points of the sweep and the PPO settings they share."""
 
     points: tuple[SweepPoint, ...]
@@ -140,7 +140,7 @@ def _ppo(env: str, profile: str) -> PPOConfig:
     )
 
 
-def sweep_config(env: str, profile: str) -> SweepConfig:
+def sweep_config(env: str, profile: str) -> CellTypeSweep:
     """The Figure 3 sweep for ``env`` at ``profile``.
 
     At ``cpu`` on the Ant, the points the verdicts compare (vanilla, 128 and 16 types)
@@ -173,7 +173,7 @@ def sweep_config(env: str, profile: str) -> SweepConfig:
         if k is not None
     ]
     points += [SweepPoint(name, types[-1], few) for name in ablations]
-    return SweepConfig(tuple(points), _ppo(env, profile))
+    return CellTypeSweep(tuple(points), _ppo(env, profile))
 
 
 def checkpoint_name(
@@ -193,7 +193,7 @@ def checkpoint_name(
     return f"{env}_{label}_s{seed}_{profile}.msgpack"
 
 
-def sweep_runs(config: SweepConfig) -> list[tuple[str, int | None, int]]:
+def sweep_runs(config: CellTypeSweep) -> list[tuple[str, int | None, int]]:
     """(settings, cell types, seed) of every run, seed by seed: all points' seed 0, then
     seed 1, ..., so that a sweep stopped part way has every point at about the same
     number of seeds."""
@@ -229,14 +229,14 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     return write_sweep(path, config, profile, Path(out_dir))
 
 
-def run_config(config: SweepConfig, settings: str, cell_types: int | None) -> PPOConfig:
+def run_config(config: CellTypeSweep, settings: str, cell_types: int | None) -> PPOConfig:
     """The PPO settings of the sweep's run at ``settings`` and ``cell_types``."""
     return with_settings(
         replace(config.ppo, network=NetworkConfig(cell_types=cell_types)), settings
     )
 
 
-def write_sweep(path: Path, config: SweepConfig, profile: str, out_dir: Path) -> Path:
+def write_sweep(path: Path, config: CellTypeSweep, profile: str, out_dir: Path) -> Path:
     """Write the results of every finished run of ``config`` under ``out_dir``; the wall
     time recorded is the sum of the runs' own training times, whenever each was trained."""
     env = config.ppo.env.name
@@ -250,8 +250,8 @@ def write_sweep(path: Path, config: SweepConfig, profile: str, out_dir: Path) ->
         "env": env,
         "complete": len(runs) == len(sweep_runs(config)),
         "runs": runs,
-        "summary": summarise_sweep(runs),
-        "summary_last_two": summarise_sweep(runs, "last_two_return"),
+        "summary": summarise_cell_types(runs),
+        "summary_last_two": summarise_cell_types(runs, "last_two_return"),
     }
     wall = sum(r["wall_time_s"] for r in runs)
     seeds = sorted({r["seed"] for r in runs})
@@ -306,7 +306,7 @@ def seed_sem(values: np.ndarray) -> float:
     return float(stats.sem(values)) if values.size > 1 else float("nan")
 
 
-def summarise_sweep(runs: list[dict], score: str = "final_return") -> list[dict]:
+def summarise_cell_types(runs: list[dict], score: str = "final_return") -> list[dict]:
     """Per settings and cell-type count: mean ``score`` (``"final_return"``, the last
     evaluation, or ``"last_two_return"``), SEM over seeds, fraction of vanilla and its SEM.
 

@@ -8,7 +8,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from sgb.experiments.fig2 import summarise_sweep
+from sgb.experiments.fig2 import summarise_compression
 from sgb.plots import PALETTE, subplots
 
 _LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
@@ -91,8 +91,8 @@ def plot_kl_counting(ax: Axes, results: Mapping[str, Any], main_counting: str) -
     """SGB innate accuracy with the sweep's KL counting ``main_counting`` and the other one
     (the ablation), at the ablation's compression ratios, mean +- SEM over seeds."""
     other = "table" if main_counting == "synapse" else "synapse"
-    table = summarise_sweep([r for r in results["records"] if r["model"] == "sgb"])["sgb"]
-    ablation = summarise_sweep(results["ablation_records"])["sgb"]
+    table = summarise_compression([r for r in results["records"] if r["model"] == "sgb"])["sgb"]
+    ablation = summarise_compression(results["ablation_records"])["sgb"]
     _band(ax, table, PALETTE["sgb"], _KL[main_counting])
     ax.errorbar(
         ablation["compression"],

@@ -7,7 +7,7 @@ special case with no sampling and no KL.
 """
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import jax
@@ -85,24 +85,11 @@ class PPOConfig:
 
     def step_settings(self) -> StepSettings:
         """The settings one training iteration reads, and nothing else."""
-        loss = LossSettings(
-            clip=self.clip,
-            value_coef=self.value_coef,
-            entropy_coef=self.entropy_coef,
-            kl_coef=self.kl_coef,
-            discount=self.discount,
-            gae_lambda=self.gae_lambda,
-            reward_scaling=self.reward_scaling,
-        )
+        loss = LossSettings(**{name: getattr(self, name) for name in LossSettings._fields})
+        copied = {f.name for f in fields(StepSettings)} - {"architecture", "loss"}
         return StepSettings(
-            env=self.env,
+            **{name: getattr(self, name) for name in copied},
             architecture=self.network.architecture,
-            num_envs=self.num_envs,
-            unroll_length=self.unroll_length,
-            num_minibatches=self.num_minibatches,
-            num_epochs=self.num_epochs,
-            learning_rate=self.learning_rate,
-            episode_length=self.episode_length,
             loss=loss,
         )
 
