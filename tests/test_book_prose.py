@@ -36,3 +36,19 @@ def test_no_chapter_types_a_verdict():
         if words:
             found[path.name] = words
     assert not found, f"verdicts typed in chapter prose (glue them from sgb.claims): {found}"
+
+
+def test_the_book_shows_the_code_that_runs():
+    """What a chapter shows is read from the package's files: a function verbatim, a
+    method dedented out of its class."""
+    import textwrap
+    from pathlib import Path
+
+    from sgb import book, genome
+    from sgb.rl import agent
+
+    shown = book.source(genome.draw_noise)
+    assert shown.startswith("def draw_noise(") and shown in Path(genome.__file__).read_text()
+    method = book.source(agent.Agent.birth)
+    assert method.startswith("def birth(")
+    assert textwrap.indent(method, "    ") in Path(agent.__file__).read_text()
