@@ -70,6 +70,7 @@ def test_notebook_is_committed_without_outputs(notebook):
             continue
         assert cell.get("outputs") == [], f"{notebook}: cell {index} has outputs"
         assert cell.get("execution_count") is None, f"{notebook}: cell {index} has a count"
+        assert "execution" not in cell["metadata"], f"{notebook}: cell {index} has run times"
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS)

@@ -108,6 +108,15 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
     assert narrow["advantage"] == 5.0 and narrow["sem_advantage"] == 0.0
     assert narrow["n_seeds"] == 3 and wide["n_seeds"] == 2
     assert wide["advantage"] == -7.5 and np.isclose(wide["sem_advantage"], 2.5)
+    for r, t in zip(runs, (0.5, -1.25, 2.0, -3.0, -4.0), strict=True):
+        r["paired_test"] = {"t": t}
+    runs[-1]["sigma_trained"] = 0.19  # the wide group's larger change: 0.19 against 0.127
+    prose = rl_spread.spread_prose(runs)
+    assert prose["spread0_advantage"] == "+5 ± 0" and prose["spread1_advantage"] == "-8 ± 2"
+    assert prose["spread0_t"] == "+0.50, -1.25, +2.00" and prose["spread1_t"] == "-3.00, -4.00"
+    assert prose["spread1_individuals"] == "42" and prose["spread1_mean_network"] == "50"
+    sigma_wide = float(np.log1p(np.exp(-2.0)))
+    assert prose["spread1_sigma_change"] == f"{100 * abs(0.19 / sigma_wide - 1):.1f} %"
 
 
 @SHARED_STEP

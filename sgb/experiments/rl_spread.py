@@ -86,6 +86,30 @@ def summarise_spread(runs: list[dict]) -> list[dict]:
     return out
 
 
+def spread_prose(runs: list[dict]) -> dict[str, str]:
+    """The values chapter 5 says of the spread sweep, as text by name, for each initial
+    spread k (0 the narrowest): ``spread{k}_sigma`` (trained sigma), ``_advantage`` (the
+    individuals' mean return less the mean network's, mean +- SEM over seeds), ``_t`` (the
+    paired t of each seed), ``_mean_network`` and ``_individuals`` (mean returns), ``_sd``
+    (the SD of the individuals' means, mean +- SEM), ``_sigma_change`` (the trained sigma's
+    relative change from its start, the largest over seeds, %)."""
+    values = {}
+    for k, row in enumerate(summarise_spread(runs)):
+        group = [r for r in runs if r["rho_init"] == row["rho_init"]]
+        change = max(abs(r["sigma_trained"] / r["sigma_init"] - 1.0) for r in group)
+        name = f"spread{k}"
+        values |= {
+            f"{name}_sigma": f"{row['sigma_trained']:.2g}",
+            f"{name}_advantage": f"{row['advantage']:+.0f} ± {row['sem_advantage']:.0f}",
+            f"{name}_t": ", ".join(f"{r['paired_test']['t']:+.2f}" for r in group),
+            f"{name}_mean_network": f"{row['mean_network_mean']:.0f}",
+            f"{name}_individuals": f"{np.mean([r['individuals_mean'] for r in group]):.0f}",
+            f"{name}_sd": f"{row['individuals_sd']:.0f} ± {row['sem_individuals_sd']:.0f}",
+            f"{name}_sigma_change": f"{100 * change:.1f} %",
+        }
+    return values
+
+
 def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
     """Train and evaluate the sweep; write ``rl/spread_<env>_<profile>.json``.
 
