@@ -12,8 +12,9 @@ The figure of merit is work per second summed over the runs that go at once (PPO
 training env-steps/s after the compiling chunk; Figure 2: training examples/s after
 the first epoch). ``ratio`` = two-at-once / alone: above 1, two at once pay.
 
-Usage: ``python benchmarks/bench_parallel.py [--ppo-steps 400000] [--rounds 2]
-[--out results/bench_parallel.json]``.
+Usage: ``python benchmarks/bench_parallel.py [--workloads ppo_ant fig2_cell]
+[--ppo-steps 400000] [--rounds 2] [--out results/bench_parallel.json]`` (the file is
+written with provenance).
 """
 
 import argparse
@@ -23,6 +24,8 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+
+from sgb.provenance import provenance, write_results
 
 ONE_THREAD = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 
@@ -35,6 +38,26 @@ config = replace(sweep_config("ant", "cpu").ppo, total_steps={steps}, num_evals=
 result = train(config, seed=0, progress=False)
 print(json.dumps({{"rate": result.train_steps_per_s}}))
 """
+
+
+FIG2_WORKER = """
+import json, time
+from sgb.data import load
+from sgb.experiments import fig2
+sweep = fig2.PROFILES["cpu"]["fashion-mnist"][0]
+data = load("fashion-mnist", seed=0)
+start = time.perf_counter()
+for setting in {settings}:
+    fig2.run_one("sgb", setting, 0, data, sweep)
+print(json.dumps({{"rate": {n} / (time.perf_counter() - start)}}))
+"""
+FIG2_SETTINGS = (10, 69, 387)  # hidden cell types: about 10x, 100x and 700x compression
+
+
+def fig2_worker(settings: tuple[int, ...] = FIG2_SETTINGS) -> str:
+    """Source of a worker that trains and evaluates Figure 2 SGB cells (Fashion-MNIST,
+    ``cpu`` profile, seed 0) one after another and prints the cells per second."""
+    return FIG2_WORKER.format(settings=tuple(settings), n=len(settings))
 
 
 def ppo_worker(steps: int) -> str:
@@ -83,16 +106,20 @@ def median(values: list[float]) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser()
+    parser.add_argument("--workloads", nargs="+", default=["ppo_ant", "fig2_cell"])
     parser.add_argument("--ppo-steps", type=int, default=400_000)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
+    workers = {"ppo_ant": lambda: ppo_worker(args.ppo_steps), "fig2_cell": fig2_worker}
     start = time.perf_counter()
-    results = {"ppo_ant": compare(ppo_worker(args.ppo_steps), args.rounds)}
-    results["wall_time_s"] = time.perf_counter() - start
+    results = {name: compare(workers[name](), args.rounds) for name in args.workloads}
     print(json.dumps(results, indent=1))
     if args.out is not None:
-        args.out.write_text(json.dumps(results, indent=1) + "\n")
+        config = {"workloads": args.workloads, "ppo_steps": args.ppo_steps, "rounds": args.rounds}
+        config["fig2_settings"] = list(FIG2_SETTINGS)
+        record = provenance(config, "benchmark", [0], time.perf_counter() - start)
+        print("wrote", write_results(args.out, results, record))
 
 
 if __name__ == "__main__":
