@@ -105,17 +105,10 @@ class Trainer:
 
     @cached_property
     def first_births(self):
-        """Jitted: every environment's first individual, from a key."""
+        """Jitted: every environment's first individual from a key, environment i's born
+        from ``split(key, num_envs)[i]`` as ``births`` would give it."""
         e = self.settings.num_envs
-        empty = jax.eval_shape(
-            jax.vmap(self.agent.birth), jax.random.split(jax.random.PRNGKey(0), e)
-        )
-
-        def first(key):
-            zeros = jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), empty)
-            return self.births(zeros, jnp.ones(e, bool), key)
-
-        return jax.jit(first)
+        return jax.jit(lambda key: jax.vmap(self.agent.birth)(jax.random.split(key, e)))
 
     def unroll(self, ts: TrainState) -> tuple[TrainState, Unroll]:
         env, agent, s = self.env, self.agent, self.settings
