@@ -161,13 +161,40 @@ class _GenomeKernel(nn.Module):
         self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
 
 
+class _BayesianBias(nn.Module):
+    """Biases (features,) drawn per neuron from a genome of shape (1, features)."""
+
+    features: int
+    prior: Prior
+    kl_counting: KLCounting
+    mean_init_std: float
+    rho_init: float
+
+    @nn.compact
+    def __call__(self, mean_network: bool) -> jnp.ndarray:
+        shape = (1, self.features)
+        genome = _GenomeKernel(
+            shape,
+            shape,
+            self.prior,
+            self.kl_counting,
+            self.mean_init_std,
+            self.rho_init,
+            name="genome",
+        )
+        return genome(mean_network)[0]
+
+
 class SGBDense(nn.Module):
     """Dense layer (..., n_in) -> (..., features) with a (in_types, out_types) genome.
 
     ``in_types``/``out_types`` of ``None`` mean one type per neuron.
     ``mean_init_std`` is in units of 1/sqrt(n_in). ``in_features``, when given, is the
     input width the layer is built for: a type table fits any width, so without it an
-    input of another width would run unnoticed.
+    input of another width would run unnoticed. ``bayesian_bias`` draws the biases too,
+    each neuron's from its own Gaussian (a genome of shape (1, features) at the layer's
+    path + ``/bias``, means starting with the kernel means' standard deviation), as the
+    authors' RL layers do (``RL/custom_layers.py``); otherwise they are plain parameters.
     """
 
     features: int
@@ -178,9 +205,11 @@ class SGBDense(nn.Module):
     mean_init_std: float = 1.0
     rho_init: float = -5.0
     in_features: int | None = None
+    bayesian_bias: bool = False
 
     def __post_init__(self) -> None:
         validation.integer("features", self.features)
+        validation.instance("bayesian_bias", self.bayesian_bias, bool)
         for name in ("in_types", "out_types", "in_features"):
             if getattr(self, name) is not None:
                 validation.integer(name, getattr(self, name))
@@ -206,7 +235,19 @@ class SGBDense(nn.Module):
             rho_init=self.rho_init,
             name="genome",
         )
-        bias = self.param("bias", nn.initializers.zeros, (self.features,))
+        if self.bayesian_bias:
+            if local_reparam:
+                raise ValueError("local_reparam draws pre-activations; it takes no bayesian_bias")
+            bias = _BayesianBias(
+                self.features,
+                self.prior,
+                self.kl_counting,
+                self.mean_init_std / n_in**0.5,
+                self.rho_init,
+                name="bias",
+            )(mean_network)
+        else:
+            bias = self.param("bias", nn.initializers.zeros, (self.features,))
         if not local_reparam:
             return x @ genome(mean_network) + bias
         mu, sigma = genome(mean_network, tables_only=True)

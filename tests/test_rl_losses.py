@@ -16,6 +16,7 @@ SETTINGS = LossSettings(
     discount=0.9,
     gae_lambda=0.8,
     reward_scaling=2.0,
+    regime="ours",
 )
 
 

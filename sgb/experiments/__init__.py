@@ -146,6 +146,18 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu cells at the paper's 50 epochs, not measured",
         },
     ),
+    "regime": Experiment(
+        "regime",
+        figure="Fig. 3 and the genomes of Figs. 4E and 5 under the authors' own training "
+        "regime at the paper's 5 x 10^7 steps (chapter 5)",
+        inputs="the Ant (spring)",
+        costs={
+            "smoke": "2 runs of 320 steps, not measured",
+            "cpu": "8 runs of 5 x 10^7 steps, each about an hour of one CPU core (not "
+            "yet measured end to end); resumable, and several processes share it",
+            "paper": "the cpu runs evaluated over 2048 environments; not measured",
+        },
+    ),
     "populations": Experiment(
         "populations",
         figure="beyond Fig. 4E and 5: individuals of 6 genomes (ours and the authors', 64 "

@@ -115,7 +115,7 @@ class PopulationConfig:
     mean_network_episodes: int = 1000
 
 
-def _ppo(env: str, profile: str) -> PPOConfig:
+def ppo_settings(env: str, profile: str) -> PPOConfig:
     """PPO settings per profile; the paper's: 2048 envs, 50M steps. The clip is 0.3, what
     the authors' code hard-codes (``self.epsilon = 0.3`` in ``BayesianAgent``); the paper's
     Table 2 gives 0.001 for the Ant. The entropy weight is Table 2's (1e-2 Ant, 1e-3
@@ -173,7 +173,7 @@ def sweep_config(env: str, profile: str) -> CellTypeSweep:
         if k is not None
     ]
     points += [SweepPoint(name, types[-1], few) for name in ablations]
-    return CellTypeSweep(tuple(points), _ppo(env, profile))
+    return CellTypeSweep(tuple(points), ppo_settings(env, profile))
 
 
 def checkpoint_name(

@@ -6,7 +6,8 @@ layer keeps one type per observation entry) and the output layer is an ordinary
 deterministic ``nn.Dense``, as in the paper. The authors' code does two things more, each
 a switch here: ``typed_inputs`` groups the observation entries into types too, and
 ``sgb_output`` makes the output layer an SGB layer (``min(cell_types, n)`` types for n
-neurons). In vanilla mode every layer is ``nn.Dense``.
+neurons), and ``bayesian_biases`` draws every SGB layer's biases too, per neuron. In
+vanilla mode every layer is ``nn.Dense``.
 
 An individual is born from a PRNG key (``Agent.birth``): the standard normal noise of
 every SGB synapse of its actor and critic (``sgb.genome.draw_noise``), kept for its whole
@@ -42,7 +43,8 @@ class Architecture:
     hidden layers with that many cell types per hidden layer. ``prior`` is ``"mixture"``
     (scale mixture, pi=0.5, sigma1=1, sigma2=e^-6) or ``"gaussian"`` (N(0, 0.1^2)).
     ``typed_inputs`` groups the observation entries into ``cell_types`` types;
-    ``sgb_output`` makes the output layer an SGB layer.
+    ``sgb_output`` makes the output layer an SGB layer; ``bayesian_biases`` draws the SGB
+    layers' biases, each neuron's from its own Gaussian (``sgb.layers.SGBDense``).
     """
 
     hidden: tuple[int, ...] = (128, 128)
@@ -50,11 +52,12 @@ class Architecture:
     prior: str = "mixture"
     typed_inputs: bool = False
     sgb_output: bool = False
+    bayesian_biases: bool = False
 
     def __post_init__(self) -> None:
         validation.integers("hidden", self.hidden)
-        validation.instance("typed_inputs", self.typed_inputs, bool)
-        validation.instance("sgb_output", self.sgb_output, bool)
+        for name in ("typed_inputs", "sgb_output", "bayesian_biases"):
+            validation.instance(name, getattr(self, name), bool)
         if self.cell_types is not None and not (
             0 < validation.integer("cell_types", self.cell_types) <= min(self.hidden)
         ):
@@ -119,6 +122,7 @@ class MLP(nn.Module):
                     mean_init_std=1.0 if cfg.mean_init is None else cfg.mean_init * n_in**0.5,
                     rho_init=cfg.rho_init,
                     in_features=n_in,
+                    bayesian_bias=cfg.bayesian_biases,
                     name=name,
                 )(x)
             else:
@@ -148,13 +152,18 @@ class Network:
 
     @cached_property
     def sgb_shapes(self) -> dict[str, tuple[int, int]]:
-        """The SGB layers and their kernel shapes (n_in, n_out), input to output."""
+        """The drawn parameters by genome path and their shapes, input to output: each SGB
+        layer's kernel (n_in, n_out) and, with ``bayesian_biases``, its biases (1, n_out)
+        at the layer's path + ``/bias``."""
         if not self.architecture.sgb:
             return {}
-        pairs = zip(self.widths[:-1], self.widths[1:], strict=True)
-        shapes = dict(zip(self.names, pairs, strict=True))
-        if not self.architecture.sgb_output:
-            del shapes["out"]
+        shapes = {}
+        for i, name in enumerate(self.names):
+            if name == "out" and not self.architecture.sgb_output:
+                continue
+            shapes[name] = (self.widths[i], self.widths[i + 1])
+            if self.architecture.bayesian_biases:
+                shapes[f"{name}/bias"] = (1, self.widths[i + 1])
         return shapes
 
     def init(self, key: jax.Array, init: NetworkConfig) -> dict:
@@ -182,7 +191,10 @@ class Network:
         else:
             sgb = genome.kernels(developed, noise)
         return [
-            (sgb[name] if name in sgb else p[name]["kernel"], p[name]["bias"])
+            (
+                sgb[name] if name in sgb else p[name]["kernel"],
+                sgb[f"{name}/bias"][..., 0, :] if f"{name}/bias" in sgb else p[name]["bias"],
+            )
             for name in self.names
         ]
 
@@ -257,12 +269,14 @@ def forward(layers: Layers, x: jnp.ndarray) -> jnp.ndarray:
     """Run phenotypes on inputs ``x`` (..., n_in) -> (..., n_out).
 
     A kernel (n_in, n_out) is shared by every input; a kernel (N, n_in, n_out) holds one
-    individual per row of ``x`` (N, ..., n_in).
+    individual per row of ``x`` (N, ..., n_in), and so do biases (N, n_out).
     """
     for i, (kernel, bias) in enumerate(layers):
         if kernel.ndim == 2:
             x = x @ kernel + bias
         else:
+            if bias.ndim == 2:  # the individuals' own biases, broadcast over the inner axes
+                bias = bias.reshape(bias.shape[:1] + (1,) * (x.ndim - 2) + bias.shape[1:])
             x = individual_matmul(x, kernel) + bias
         if i < len(layers) - 1:
             x = nn.swish(x)

@@ -1,12 +1,18 @@
 """The PPO loss of an SGB (or vanilla) actor-critic: a pure function of parameters and data.
 
-Each unroll's individual is rebuilt from its kept noise *under the current genome*, so
-the ratio pi_new(a|s) / pi_old(a|s) compares the same individual (same noise draw) before
-and after the genome update, as reparameterised sampling allows. Loss = PPO clip loss
-+ c1 * 0.5 * squared value error - c2 * entropy + c3 * KL of the actor's and critic's
-genomes. The entropy is that of the squashed action tanh(u), estimated at one
-reparameterised draw (as Brax's PPO does). Advantages by GAE, normalised over the valid
-steps.
+Loss = PPO clip loss + c1 * 0.5 * squared value error - c2 * entropy + c3 * KL of the
+actor's and critic's genomes. The entropy is that of the squashed action tanh(u),
+estimated at one reparameterised draw (as Brax's PPO does). Advantages by GAE.
+
+Under our regime each unroll's individual is rebuilt from its kept noise *under the
+current genome*, so the ratio pi_new(a|s) / pi_old(a|s) compares the same individual
+(same noise draw) before and after the genome update, as reparameterised sampling
+allows; advantages are normalised over the valid steps, and a truncated step bootstraps
+from the state it reached. Under the authors' regime (``RL/models.py``,
+``BayesianAgent.loss``) the minibatch's actor and critic are one fresh draw each, so the
+ratio compares two different draws; advantages are not normalised; a truncated step's
+advantage and value error are zero (their environments reset on the spot, as Brax's
+``compute_gae`` assumes).
 """
 
 from typing import NamedTuple
@@ -29,6 +35,7 @@ class LossSettings(NamedTuple):
     discount: float
     gae_lambda: float
     reward_scaling: float
+    regime: str  # "ours" or "authors"
 
 
 class Unroll(NamedTuple):
@@ -45,7 +52,7 @@ class Unroll(NamedTuple):
     individual: Individual  # the players' noise, leading axis E; None for vanilla
 
 
-def gae(reward, value, next_value, done, truncation, discount, lam):
+def gae(reward, value, next_value, done, truncation, discount, lam, bootstrap_truncated=True):
     """Policy advantages and value targets along the last axis (time).
 
     The value targets are the lambda-returns G_t = V(s_t) + A_t, with A_t the GAE(lambda)
@@ -54,10 +61,14 @@ def gae(reward, value, next_value, done, truncation, discount, lam):
     Brax's PPO computes it (measured on the Ant: GAE(lambda) itself left two of three
     seeds standing at 2M steps). ``value``/``next_value``: V(s_t), V(s_{t+1}); terminal
     steps (done and not truncated) do not bootstrap; truncated steps bootstrap from
-    s_{t+1}; the last step's G_{t+1} is V(s_{t+1}).
+    s_{t+1}; the last step's G_{t+1} is V(s_{t+1}). With ``bootstrap_truncated=False``
+    (s_{t+1} unknown: the environment was reset) a truncated step's advantage is 0 and its
+    value target V(s_t), as in Brax.
     """
     terminal = done * (1.0 - truncation)
     delta = reward + discount * (1.0 - terminal) * next_value - value
+    if not bootstrap_truncated:
+        delta = delta * (1.0 - truncation)
 
     def back(carry, x):
         d, nd = x
@@ -86,9 +97,12 @@ def ppo_loss(
 ) -> tuple[jnp.ndarray, dict]:
     """The PPO loss of ``data`` under ``params``, a scalar, and its parts by name (policy,
     value, entropy, kl, total). ``key`` draws the entropy's action and the KL's Monte Carlo
-    terms. Differentiable in ``params``."""
-    actor = agent.actor.layers(params.actor, data.individual.actor)
-    critic = agent.critic.layers(params.critic, data.individual.critic)
+    terms (and, under the authors' regime, the minibatch's fresh draw:
+    ``agent.birth(fold_in(key, 1))``). Differentiable in ``params``."""
+    authors = settings.regime == "authors"
+    individual = agent.birth(jax.random.fold_in(key, 1)) if authors else data.individual
+    actor = agent.actor.layers(params.actor, individual.actor)
+    critic = agent.critic.layers(params.critic, individual.critic)
     all_obs = jnp.concatenate([data.obs, data.last_obs[:, None]], axis=1)
     values = agent.value(critic, normalizer, all_obs)
     loc, scale = agent.policy(actor, normalizer, data.obs)
@@ -101,10 +115,12 @@ def ppo_loss(
         data.truncation,
         settings.discount,
         settings.gae_lambda,
+        bootstrap_truncated=not authors,
     )
-    mean_adv = masked_mean(adv, data.valid)
-    std_adv = jnp.sqrt(masked_mean((adv - mean_adv) ** 2, data.valid)) + 1e-8
-    adv = (adv - mean_adv) / std_adv
+    if not authors:
+        mean_adv = masked_mean(adv, data.valid)
+        std_adv = jnp.sqrt(masked_mean((adv - mean_adv) ** 2, data.valid)) + 1e-8
+        adv = (adv - mean_adv) / std_adv
     ratio = jnp.exp(log_prob - data.log_prob)
     clipped = jnp.clip(ratio, 1 - settings.clip, 1 + settings.clip)
     policy_loss = -masked_mean(jnp.minimum(ratio * adv, clipped * adv), data.valid)

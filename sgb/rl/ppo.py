@@ -24,10 +24,18 @@ from sgb.rl.normalizer import Normalizer, init_normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.trainer import StepSettings, TrainState, make_trainer, strong
 
+REGIMES = ("ours", "authors")
+
 
 @dataclass(frozen=True)
 class PPOConfig:
-    """Hyperparameters of one PPO run; steps are environment steps summed over environments."""
+    """Hyperparameters of one PPO run; steps are environment steps summed over environments.
+
+    ``regime`` is ``"ours"`` or ``"authors"`` (``sgb.rl.trainer``, ``sgb.rl.losses``):
+    under the authors' an iteration collects ``unrolls_per_iteration`` unrolls of every
+    environment (1 under ours), and an evaluation is their window return
+    (``Trainer.window_return``) over ``eval_individuals`` environments, each step a new draw.
+    """
 
     env: EnvSpec = field(default_factory=EnvSpec)
     network: NetworkConfig = field(default_factory=NetworkConfig)
@@ -47,6 +55,8 @@ class PPOConfig:
     episode_length: int = 1000
     num_evals: int = 5
     eval_individuals: int = 32
+    regime: str = "ours"
+    unrolls_per_iteration: int = 1
 
     def __post_init__(self) -> None:
         validation.instance("env", self.env, EnvSpec)
@@ -60,6 +70,7 @@ class PPOConfig:
             "episode_length",
             "num_evals",
             "eval_individuals",
+            "unrolls_per_iteration",
         ):
             validation.integer(name, getattr(self, name))
         validation.positive("learning_rate", self.learning_rate)
@@ -69,15 +80,19 @@ class PPOConfig:
         validation.positive("reward_scaling", self.reward_scaling)
         for name in ("value_coef", "entropy_coef", "kl_coef"):
             validation.non_negative(name, getattr(self, name))
-        if self.num_envs % self.num_minibatches:
+        validation.choice("regime", self.regime, REGIMES)
+        if self.regime == "ours" and self.unrolls_per_iteration != 1:
+            raise ValueError("our regime collects one unroll per iteration")
+        sequences = self.num_envs * self.unrolls_per_iteration
+        if sequences % self.num_minibatches:
             raise ValueError(
-                f"num_envs={self.num_envs} must be a multiple of num_minibatches="
-                f"{self.num_minibatches}"
+                f"num_envs x unrolls_per_iteration = {sequences} must be a multiple of "
+                f"num_minibatches={self.num_minibatches}"
             )
 
     @property
     def steps_per_iteration(self) -> int:
-        return self.num_envs * self.unroll_length
+        return self.num_envs * self.unroll_length * self.unrolls_per_iteration
 
     @property
     def iterations(self) -> int:
@@ -130,7 +145,8 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
     # strong types, as the training step returns them (weak types would force a recompile)
     env_state = jax.tree_util.tree_map(strong, env_state)
     e = config.num_envs
-    individual = trainer.first_births(ki) if config.network.sgb else Individual(None, None)
+    kept = config.network.sgb and config.regime == "ours"
+    individual = trainer.first_births(ki) if kept else Individual(None, None)
     return TrainState(
         params=params,
         opt_state=trainer.optimizer.init(params),
@@ -140,6 +156,7 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
         finished=jnp.zeros(e),
         individual=individual,
         key=key,
+        start_state=env_state if config.regime == "authors" else None,
     )
 
 
@@ -168,9 +185,14 @@ def _guard(holder: dict) -> Guard:
 
 
 def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: int) -> float:
-    """Mean innate return of ``eval_individuals`` individuals, one full episode each."""
+    """Mean innate return of ``eval_individuals`` individuals, one full episode each; under
+    the authors' regime, their window return over ``eval_individuals`` environments."""
     validation.instance("config", config, PPOConfig)
     validation.instance("params", params, Params)
+    if config.regime == "authors":
+        trainer = make_trainer(config.step_settings())
+        key = jax.random.PRNGKey(validation.seed("seed", seed))
+        return float(trainer.window_return(params, normalizer, key, config.eval_individuals))
     returns = population_returns(
         config.env,
         config.network,

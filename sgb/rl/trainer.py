@@ -16,6 +16,19 @@ One training iteration:
 3. *Update.* ``num_epochs`` passes over the unrolls in ``num_minibatches``
    minibatches of environments, each a step of Adam on ``sgb.rl.losses.ppo_loss``.
 
+That is our regime (``regime="ours"``). The authors' regime (``regime="authors"``;
+their ``RL/training_torch.py`` and ``RL/models.py``) differs in three ways:
+
+- *Redraws.* Every environment step draws one actor from the genome
+  (``Network.draw``), shared by all environments; no individual is kept.
+- *Resets on the spot.* An environment whose episode ends starts again at once from
+  the state its episode began in (Brax's ``AutoResetWrapper``), and every chunk of
+  iterations begins with all environments reset (their ``env.reset()`` per block).
+- *Batches of unrolls.* An iteration collects ``unrolls_per_iteration`` unrolls of
+  every environment before the update, whose minibatches are drawn from all of them.
+
+The loss follows the regime too (``sgb.rl.losses``).
+
 ``StepSettings`` is the part of a run's settings that an iteration reads: runs that
 differ only in the rest (their length, their evaluations, how their genome starts)
 share one ``Trainer`` and its compiled step, and the step cannot read what it is not
@@ -30,9 +43,17 @@ import jax
 import jax.numpy as jnp
 import optax
 
-from sgb import validation
+from sgb import genome, validation
 from sgb.noise import standard_normal
-from sgb.rl.agent import Agent, Architecture, Individual, Params, make_agent, tanh_gaussian_log_prob
+from sgb.rl.agent import (
+    Agent,
+    Architecture,
+    Individual,
+    Layers,
+    Params,
+    make_agent,
+    tanh_gaussian_log_prob,
+)
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.losses import LossSettings, Unroll, ppo_loss
 from sgb.rl.normalizer import Normalizer, update
@@ -47,6 +68,8 @@ class StepSettings:
     architecture: Architecture
     num_envs: int
     unroll_length: int
+    unrolls_per_iteration: int
+    regime: str
     num_minibatches: int
     num_epochs: int
     learning_rate: float
@@ -63,6 +86,7 @@ class TrainState(NamedTuple):
     finished: jnp.ndarray  # (E,) 1.0 where the episode ended
     individual: Individual  # each environment's player, leading axis E; None for vanilla
     key: jax.Array
+    start_state: object = None  # authors' regime: where each environment's episode began
 
 
 @dataclass(frozen=True, eq=False)
@@ -110,7 +134,18 @@ class Trainer:
         e = self.settings.num_envs
         return jax.jit(lambda key: jax.vmap(self.agent.birth)(jax.random.split(key, e)))
 
+    def acting_actor(
+        self, actor_params: dict, individual: genome.Noise | None, key: jax.Array
+    ) -> Layers:
+        """The actor phenotypes that act at one step: under our regime the environments'
+        own individuals (``individual``, leading axis E); under the authors' one actor
+        drawn from ``key``, shared by every environment."""
+        if self.settings.regime == "authors":
+            return self.agent.actor.layers(actor_params, self.agent.actor.draw(key))
+        return self.agent.actor.layers(actor_params, individual)
+
     def unroll(self, ts: TrainState) -> tuple[TrainState, Unroll]:
+        """Our regime's unroll: every environment played by its own individual."""
         env, agent, s = self.env, self.agent, self.settings
         key, k_reset, k_birth, k_act = jax.random.split(ts.key, 4)
         e = s.num_envs
@@ -127,7 +162,7 @@ class Trainer:
         env_state = jax.lax.cond(jnp.any(fresh), reset, lambda state: state, ts.env_state)
         individual = self.births(ts.individual, fresh, k_birth)
         steps = jnp.where(fresh, 0.0, ts.steps)
-        actor = agent.actor.layers(ts.params.actor, individual.actor)
+        actor = self.acting_actor(ts.params.actor, individual.actor, k_birth)
 
         def step(carry, k):
             state, steps, finished = carry
@@ -152,6 +187,83 @@ class Trainer:
         )
         return ts, data
 
+    def shared_step(self, params: Params, normalizer, start_state):
+        """The authors' regime's environment step ``(state, steps), key -> (state, steps),
+        (obs, u, log_prob, reward, done, truncation)``, for states (E,): one actor drawn
+        for all E, actions sampled, ended episodes restarted from ``start_state``."""
+        env, agent, s = self.env, self.agent, self.settings
+
+        def step(carry, k):
+            state, steps = carry
+            k_draw, k_u = jax.random.split(k)
+            actor = self.acting_actor(params.actor, None, k_draw)
+            loc, scale = agent.policy(actor, normalizer, state.obs)
+            u = loc + scale * standard_normal(k_u, loc.shape)
+            log_prob = tanh_gaussian_log_prob(u, loc, scale)
+            nstate = jax.vmap(env.step)(state, jnp.tanh(u))
+            steps = steps + 1.0
+            truncation = jnp.where(steps >= s.episode_length, 1.0 - nstate.done, 0.0)
+            done = jnp.maximum(nstate.done, truncation)
+            out = (state.obs, u, log_prob, nstate.reward, done, truncation)
+
+            def restart(first, now):
+                return jnp.where(done.reshape(done.shape + (1,) * (now.ndim - 1)) > 0, first, now)
+
+            nstate = jax.tree_util.tree_map(restart, start_state, nstate)
+            return (nstate, jnp.where(done > 0, 0.0, steps)), out
+
+        return step
+
+    def shared_unroll(self, ts: TrainState) -> tuple[TrainState, Unroll]:
+        """The authors' regime's unroll: ``unroll_length`` steps of ``shared_step``."""
+        key, k_act = jax.random.split(ts.key)
+        step = self.shared_step(ts.params, ts.normalizer, ts.start_state)
+        keys = jax.random.split(k_act, self.settings.unroll_length)
+        (env_state, steps), out = jax.lax.scan(step, (ts.env_state, ts.steps), keys)
+        out = [jnp.swapaxes(x, 0, 1) for x in out]
+        data = Unroll(
+            *out,
+            valid=jnp.ones_like(out[2]),
+            last_obs=env_state.obs,
+            individual=Individual(None, None),
+        )
+        return ts._replace(env_state=env_state, steps=steps, key=key), data
+
+    def collect(self, ts: TrainState) -> tuple[TrainState, Unroll]:
+        """One iteration's data: our regime's unroll, or the authors' regime's
+        ``unrolls_per_iteration`` unrolls of every environment, as (U * E, T, ...)."""
+        if self.settings.regime == "ours":
+            return self.unroll(ts)
+        ts, data = jax.lax.scan(
+            lambda ts, _: self.shared_unroll(ts), ts, None, self.settings.unrolls_per_iteration
+        )
+        return ts, jax.tree_util.tree_map(lambda x: x.reshape(-1, *x.shape[2:]), data)
+
+    def restart_all(self, ts: TrainState) -> TrainState:
+        """The authors' regime's start of a chunk: every environment reset, each to a new
+        initial state that its episodes restart from."""
+        key, k_reset = jax.random.split(ts.key)
+        env_state = jax.vmap(self.env.reset)(jax.random.split(k_reset, self.settings.num_envs))
+        steps = jnp.zeros(self.settings.num_envs)
+        return ts._replace(env_state=env_state, start_state=env_state, steps=steps, key=key)
+
+    @cached_property
+    def window_return(self):
+        """Jitted ``(params, normalizer, key, n_envs) -> return``: the authors' evaluation
+        (``eval_unroll`` in ``RL/training_torch.py``): ``n_envs`` environments play
+        ``episode_length`` steps under the authors' regime (a new draw every step, sampled
+        actions, ended episodes restarted); the summed reward over the episodes ended."""
+
+        def run(params: Params, normalizer, key: jax.Array, n_envs: int) -> jnp.ndarray:
+            k_reset, k_act = jax.random.split(key)
+            state = jax.vmap(self.env.reset)(jax.random.split(k_reset, n_envs))
+            step = self.shared_step(params, normalizer, state)
+            keys = jax.random.split(k_act, self.settings.episode_length)
+            _, (_, _, _, reward, done, _) = jax.lax.scan(step, (state, jnp.zeros(n_envs)), keys)
+            return jnp.sum(reward) / jnp.maximum(jnp.sum(done), 1.0)
+
+        return jax.jit(run, static_argnames="n_envs")
+
     def sgd(self, ts: TrainState, data: Unroll) -> tuple[TrainState, dict]:
         s = self.settings
         key, k_perm = jax.random.split(ts.key)
@@ -167,7 +279,7 @@ class Trainer:
 
         def epoch(carry, k):
             k_perm, k_entropy = jax.random.split(k)
-            perm = jax.random.permutation(k_perm, s.num_envs)
+            perm = jax.random.permutation(k_perm, s.num_envs * s.unrolls_per_iteration)
             keys = jax.random.split(k_entropy, s.num_minibatches)
             return jax.lax.scan(minibatch, carry, (perm.reshape(s.num_minibatches, -1), keys))
 
@@ -181,18 +293,25 @@ class Trainer:
     @cached_property
     def iterations(self):
         """Jitted ``(ts, n) -> (ts, metrics)``: ``n`` PPO iterations (unroll, normaliser
-        update, SGD) in one call; the metrics of every iteration, shape (n,) each."""
+        update, SGD) in one call, after ``restart_all`` under the authors' regime; the
+        metrics of every iteration, shape (n,) each."""
 
         def run(ts: TrainState, n: int):
+            if self.settings.regime == "authors":
+                ts = self.restart_all(ts)
+
             def body(ts, _):
-                ts, data = self.unroll(ts)
+                ts, data = self.collect(ts)
                 ts = ts._replace(normalizer=update(ts.normalizer, data.obs, data.valid))
                 return self.sgd(ts, data)
 
             ts, metrics = jax.lax.scan(body, ts, None, n)
             # Brax's step returns a few weakly typed leaves; strong types keep the next
             # call's signature equal to this one's, so it does not compile again.
-            ts = ts._replace(env_state=jax.tree_util.tree_map(strong, ts.env_state))
+            ts = ts._replace(
+                env_state=jax.tree_util.tree_map(strong, ts.env_state),
+                start_state=jax.tree_util.tree_map(strong, ts.start_state),
+            )
             return ts, metrics
 
         return jax.jit(run, static_argnames="n")

@@ -1,0 +1,69 @@
+"""The authors' training regime, as their public code runs it, and their Figure 3 scale.
+
+Read from ``self-supervisor/genomic_bottleneck_v2`` at commit 7effad6: the PPO settings
+from ``RL/configs/ant.yaml`` and ``RL/configs/halfcheetah.yaml``; the regime
+(``sgb.rl.trainer``: a new draw of the actor at every environment step, shared by every
+environment, and a fresh draw in the loss; resets on the spot; their evaluation) from
+``RL/training_torch.py`` and ``RL/models.py``; the Bayesian biases from
+``RL/custom_layers.py`` (``BayesianLinear``, ``bias_sampler``). Their ``batch_size`` x
+``num_minibatches`` sequences per iteration are ``unrolls_per_iteration`` unrolls of
+every environment here. The genome itself (every layer typed, rho -7, ...) is a separate
+choice, ``sgb.experiments.rl.with_settings(..., "authors")``.
+"""
+
+from dataclasses import replace
+
+from sgb import validation
+from sgb.rl.ppo import PPOConfig
+
+_ENVS = 2048
+_MINIBATCHES = 32
+# per environment: (batch_size, num_update_epochs, unroll_length, entropy_cost,
+# complexity_cost, reward_scaling, discounting, eval_frequency) of their yaml files
+_YAML = {
+    "ant": (1024, 4, 5, 1e-2, 0.0, 0.1, 0.97, 10),
+    "halfcheetah": (512, 8, 20, 1e-3, 1e-4, 1.0, 0.95, 20),
+}
+# Figure 3's y-axis in their code (``proportion_of_max_score``): (R - min) / (SOTA - min)
+FIG3_SCALE = {"ant": (-724.0, 8706.0), "halfcheetah": (-724.0, 4838.0)}
+
+
+def authors_regime(ppo: PPOConfig) -> PPOConfig:
+    """``ppo`` trained as the authors train: their regime, their PPO settings for its
+    environment (learning rate 3e-4, clip 0.3, 2048 environments, 32 minibatches, 5 x 10^7
+    steps, and the rest of their yaml), evaluated ``num_evals`` = their
+    ``eval_frequency`` times, and an SGB network's biases drawn too. Its network, its
+    evaluation size (``eval_individuals``) and its episode length are kept."""
+    validation.instance("ppo", ppo, PPOConfig)
+    validation.choice("env", ppo.env.name, tuple(_YAML))
+    batch, epochs, unroll, entropy, kl, scaling, discount, evals = _YAML[ppo.env.name]
+    network = ppo.network
+    if network.sgb:
+        network = replace(network, bayesian_biases=True)
+    return replace(
+        ppo,
+        network=network,
+        regime="authors",
+        total_steps=50_000_000,
+        num_envs=_ENVS,
+        unroll_length=unroll,
+        unrolls_per_iteration=batch * _MINIBATCHES // _ENVS,
+        num_minibatches=_MINIBATCHES,
+        num_epochs=epochs,
+        learning_rate=3e-4,
+        clip=0.3,
+        value_coef=0.5,
+        entropy_coef=entropy,
+        kl_coef=kl,
+        discount=discount,
+        gae_lambda=0.95,
+        reward_scaling=scaling,
+        num_evals=evals,
+    )
+
+
+def authors_scale(env: str, value: float) -> float:
+    """A return on the authors' Figure 3 scale, (R + 724) / (SOTA + 724) with their
+    hard-coded SOTA (8706 on the Ant, 4838 on the HalfCheetah)."""
+    low, high = FIG3_SCALE[validation.choice("env", env, tuple(FIG3_SCALE))]
+    return (value - low) / (high - low)
