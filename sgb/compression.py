@@ -7,16 +7,15 @@ under one of two conventions (``compression``):
 
 * ``"ours"``: every parameter that defines a network. The uncompressed network
   counts weights and biases; the SGB its means, rhos and per-neuron biases; the
-  DGB its g-nets' parameters and the p-net's biases (stored directly).
-* ``"authors"`` (their code): weights only against the mean tables only (SGB)
-  or the g-nets only (DGB).
+  DGB all its g-nets' parameters and the p-net's biases that are stored directly
+  (as the authors' DGB code counts, ``GNetList.compression``).
+* ``"authors"`` (their SGB code): weights only against the mean tables only (SGB)
+  or the kernels' g-nets only (DGB).
 
-A DGB g-net maps a synapse's (pre, post) neuron codes through two hidden ReLU
-layers, (width, ``GNET_SECOND_HIDDEN``), to one weight; input codes are binary
-(ceil(log2 n) bits), output codes one-hot.
+A DGB's g-nets are laid out by ``sgb.dgb_layout`` (``"ours"`` or ``"authors"``); its
+``setting`` is the width of the first hidden layer of its kernels' g-nets.
 """
 
-import math
 from collections.abc import Sequence
 from typing import Any, Literal
 
@@ -24,12 +23,12 @@ import jax
 import numpy as np
 
 from sgb import validation
+from sgb.dgb_layout import code_dims, gnet_specs, input_dim, stored_bias_layers
 
 ModelKind = Literal["sgb", "dgb", "dense"]
 MODEL_KINDS: tuple[str, ...] = ("sgb", "dgb", "dense")
 Convention = Literal["ours", "authors"]
 CONVENTIONS: tuple[str, ...] = ("ours", "authors")
-GNET_SECOND_HIDDEN = 10
 
 
 def _check_sizes(sizes: Sequence[int]) -> None:
@@ -70,34 +69,33 @@ def sgb_param_count(sizes: Sequence[int], cell_types: Sequence[int | None]) -> i
     return 2 * sgb_table_count(sizes, cell_types) + int(sum(sizes[1:]))
 
 
-def code_dims(sizes: Sequence[int]) -> list[int]:
-    """Length of each neuron layer's DGB code: binary digits, one-hot at the output."""
-    _check_sizes(sizes)
-    return [max(1, math.ceil(math.log2(n))) for n in sizes[:-1]] + [int(sizes[-1])]
-
-
-def dgb_gnet_hidden(width: int) -> tuple[int, int]:
-    """Hidden widths of a g-net whose first hidden layer has ``width`` units."""
-    return (int(width), GNET_SECOND_HIDDEN)
-
-
 def gnet_param_count(code_dim: int, hidden: Sequence[int]) -> int:
     """Parameters of one g-net with ``code_dim`` inputs, ``hidden`` layers and one output."""
     validation.integers("gnet hidden widths", hidden)
     return dense_param_count((code_dim, *hidden, 1))
 
 
-def dgb_gnet_count(sizes: Sequence[int], gnet_hidden: Sequence[int]) -> int:
-    """Parameters of all g-nets (one per dense layer) of a DGB MLP with layer ``sizes``."""
+def dgb_gnet_count(
+    sizes: Sequence[int], width: int, layout: str = "ours", kernels_only: bool = False
+) -> int:
+    """Parameters of the g-nets (``kernels_only``: those of the kernels) of a DGB MLP with
+    layer ``sizes``, kernels' g-nets of first hidden ``width``, laid out by ``layout``."""
+    _check_sizes(sizes)
     dims = code_dims(sizes)
+    specs = gnet_specs(sizes, width, layout)
     return int(
-        sum(gnet_param_count(a + b, gnet_hidden) for a, b in zip(dims[:-1], dims[1:], strict=True))
+        sum(
+            gnet_param_count(input_dim(s, dims), s.hidden)
+            for s in specs
+            if s.target == "kernel" or not kernels_only
+        )
     )
 
 
-def dgb_param_count(sizes: Sequence[int], gnet_hidden: Sequence[int]) -> int:
-    """Genome size of a DGB MLP: all g-nets plus the p-net's biases."""
-    return dgb_gnet_count(sizes, gnet_hidden) + int(sum(sizes[1:]))
+def dgb_param_count(sizes: Sequence[int], width: int, layout: str = "ours") -> int:
+    """Genome size of a DGB MLP: all its g-nets plus the p-net's biases stored directly."""
+    stored = stored_bias_layers(sizes, gnet_specs(sizes, width, layout))
+    return dgb_gnet_count(sizes, width, layout) + int(sum(sizes[i + 1] for i in stored))
 
 
 def tree_param_count(params: Any) -> int:
@@ -119,19 +117,22 @@ def genome_size(
     in_types: int,
     out_types: int,
     convention: Convention = "ours",
+    layout: str = "ours",
 ) -> int:
     """Parameters counted for a model of the dense stack ``sizes`` under ``convention``.
 
     ``setting``: cell types of every hidden layer (``"sgb"``) or the width of the
-    g-nets' first hidden layer (``"dgb"``); ignored for ``"dense"``.
+    kernels' g-nets' first hidden layer (``"dgb"``, laid out by ``layout``); ignored for
+    ``"dense"``.
     """
     ours = validation.choice("convention", convention, CONVENTIONS) == "ours"
     if kind == "sgb":
         types = (in_types, *([setting] * (len(sizes) - 2)), out_types)
         return sgb_param_count(sizes, types) if ours else sgb_table_count(sizes, types)
     if kind == "dgb":
-        hidden = dgb_gnet_hidden(setting)
-        return dgb_param_count(sizes, hidden) if ours else dgb_gnet_count(sizes, hidden)
+        if ours:
+            return dgb_param_count(sizes, setting, layout)
+        return dgb_gnet_count(sizes, setting, layout, kernels_only=True)
     if kind == "dense":
         return dense_param_count(sizes) if ours else weight_count(sizes)
     raise ValueError(f"kind must be one of {MODEL_KINDS}, got {kind!r}")
@@ -144,12 +145,13 @@ def compression(
     in_types: int,
     out_types: int,
     convention: Convention = "ours",
+    layout: str = "ours",
 ) -> float:
-    """Compression ratio of any model kind under ``convention`` ("ours" or "authors")."""
+    """Compression ratio of any model kind under ``convention`` ("ours" or "authors"); a
+    DGB's g-nets laid out by ``layout``."""
     uncompressed = genome_size("dense", sizes, 0, in_types, out_types, convention)
-    return compression_ratio(
-        uncompressed, genome_size(kind, sizes, setting, in_types, out_types, convention)
-    )
+    compressed = genome_size(kind, sizes, setting, in_types, out_types, convention, layout)
+    return compression_ratio(uncompressed, compressed)
 
 
 def setting_for_ratio(
@@ -159,6 +161,7 @@ def setting_for_ratio(
     in_types: int,
     out_types: int,
     convention: Convention = "ours",
+    layout: str = "ours",
 ) -> int:
     """The setting (hidden cell types, or g-net width) whose compression is nearest ``ratio``
     on a log scale. SGB types range over 1..min(hidden); g-net widths over 1..4096."""
@@ -171,9 +174,20 @@ def setting_for_ratio(
     else:
         raise ValueError(f"kind must be 'sgb' or 'dgb', got {kind!r}")
     ratios = np.array(
-        [compression(kind, sizes, int(c), in_types, out_types, convention) for c in candidates]
+        [
+            compression(kind, sizes, int(c), in_types, out_types, convention, layout)
+            for c in candidates
+        ]
     )
     return int(candidates[np.argmin(np.abs(np.log(ratios) - np.log(ratio)))])
+
+
+def authors_nominal_width(sizes: Sequence[int], ratio: float) -> int:
+    """The g-net width the authors' DGB script builds for a nominal compression ``ratio``:
+    round((p - 20 r) / (60 r)), p the p-net's parameters (``003_MNIST_automatic_2.py``).
+    The network it builds is compressed otherwise (``compression(..., layout="authors")``)."""
+    p = dense_param_count(sizes)
+    return int(np.round((p - 20 * validation.positive("ratio", ratio)) / (60 * ratio)))
 
 
 def hidden_types_sweep(

@@ -3,19 +3,23 @@ authors train it.
 
 Every neuron of the phenotypic network (p-net) carries a fixed code: the binary
 digits of its index, as +-1 (``binary_codes``), or a one-hot vector for the output
-layer. For each dense layer a genomic network (g-net) maps the concatenated
-(pre code, post code) of a synapse through two hidden ReLU layers (width, 10) to its
-weight, so a g-net of P parameters defines all n_pre x n_post weights of its layer.
+layer. A genomic network (g-net) maps the concatenated (pre code, post code) of a
+synapse through hidden ReLU layers to its weight, so a g-net of P parameters defines
+all n_pre x n_post weights of its layer; a biases' g-net maps a neuron's code to its
+bias. Which parameters are generated, through which g-nets, is the layout
+(``sgb.dgb_layout``: ours, every kernel through (width, 10) and every bias stored, or
+the authors'); the rest is stored directly.
 
-``train_dgb`` alternates for ``rounds`` rounds: ``pnet_steps`` Adam minibatches
-of the p-net on cross-entropy, ``gnet_steps`` Adam steps fitting the g-nets to
-the p-net's kernels (mean squared error on ``gnet_batch`` random synapses per
-layer), then writing the generated kernels back into the p-net. After every
-write-back the generated network is scored on a validation set drawn from the
-training images (as the authors do); the best one is the innate network.
-The whole training state is one ``DGBState``, passed and returned.
+``train_dgb`` alternates for ``rounds`` rounds: ``pnet_steps`` Adam minibatches of the
+p-net on cross-entropy, then fitting the g-nets to the p-net's parameters (mean squared
+error on random minibatches of ``gnet_batch`` entries: under our layout ``gnet_steps``
+steps of all g-nets together, under the authors' each g-net alone for its epochs), then
+writing the generated parameters back into the p-net. After every write-back the
+generated network is scored on a validation set drawn from the training images (as the
+authors do); the best one is the innate network. The whole training state is one
+``DGBState``, passed and returned.
 
-The genome is the g-nets' parameters plus the p-net's biases (stored directly);
+The genome is the g-nets' parameters plus the p-net's biases stored directly;
 ``sgb.compression.dgb_param_count`` counts them.
 """
 
@@ -32,9 +36,9 @@ import optax
 from flax.training.train_state import TrainState
 
 from sgb import validation
-from sgb.classifiers import DenseClassifier, dense_sizes, with_kernels
-from sgb.compression import code_dims, dgb_gnet_hidden
+from sgb.classifiers import DenseClassifier, dense_sizes
 from sgb.data import Dataset, check_dataset
+from sgb.dgb_layout import LAYOUTS, GNetSpec, code_dims, entries, gnet_specs, input_dim
 from sgb.divergence import FIT_BOUND, Guard, learning_rate_cause
 from sgb.training import accuracy, adam_state, cross_entropy_step, train_loop
 
@@ -92,6 +96,21 @@ def generate_kernel(layers: GNetParams, pre: jnp.ndarray, post: jnp.ndarray) -> 
     return rows / jnp.sqrt(pre.shape[0])
 
 
+def generate_biases(layers: GNetParams, post: jnp.ndarray) -> jnp.ndarray:
+    """The biases (n_post,) a biases' g-net encodes from its neurons' codes (n_post, code)."""
+    kernel, bias = layers[0]
+    return _gnet_tail(layers, post @ kernel + bias)
+
+
+def bias_fit_loss(
+    layers: GNetParams, post: jnp.ndarray, biases: jnp.ndarray, key: jax.Array, batch: int
+) -> jnp.ndarray:
+    """Mean squared error, on ``batch`` random neurons, between a biases' g-net's outputs
+    and the biases."""
+    j = jax.random.randint(key, (batch,), 0, post.shape[0])
+    return jnp.mean((generate_biases(layers, post[j]) - biases[j]) ** 2)
+
+
 def fit_loss(
     layers: GNetParams,
     pre: jnp.ndarray,
@@ -115,9 +134,11 @@ def fit_loss(
 class DGBConfig:
     """A DGB classifier and its training (defaults: the authors', ``rounds`` aside).
 
-    ``hidden``: p-net hidden widths; ``gnet_width``: first hidden layer of every g-net
-    (the second has 10 units). Per round: ``pnet_steps`` minibatches of ``batch_size``,
-    then ``gnet_steps`` g-net Adam steps on ``gnet_batch`` synapses per layer.
+    ``hidden``: p-net hidden widths; ``gnet_width``: first hidden layer of the kernels'
+    g-nets (the second has 10 units); ``layout``: ``sgb.dgb_layout``'s ``"ours"`` or
+    ``"authors"``. Per round: ``pnet_steps`` minibatches of ``batch_size``, then the
+    g-nets' fit on minibatches of ``gnet_batch`` entries: ``gnet_steps`` steps of all
+    together (ours), or each g-net's epochs of its entries (the authors').
     ``validation_size`` training images score each write-back.
     """
 
@@ -133,9 +154,11 @@ class DGBConfig:
     validation_size: int = 10_000
     seed: int = 0
     conv_features: tuple[int, ...] = ()
+    layout: str = "ours"
 
     def __post_init__(self) -> None:
         validation.integers("hidden", self.hidden)
+        validation.choice("layout", self.layout, LAYOUTS)
         for name in (
             "gnet_width",
             "rounds",
@@ -157,10 +180,11 @@ class DGBConfig:
 class DGBState:
     """Everything a DGB's training carries from step to step.
 
-    ``pnet``: the p-net and its optimizer; ``gnets``/``gnet_opt``: every layer's
-    g-net and its optimizer; ``best_params``/``best_gnets``/``best_accuracy``: the
-    generated network with the highest validation accuracy so far; ``fit_mse``: the
-    last fit's error; ``rounds``: write-backs done; ``key``: for synapse sampling.
+    ``pnet``: the p-net and its optimizer; ``gnets``/``gnet_opt``: every g-net (in the
+    layout's order) and the optimizer state of each group fitted together;
+    ``best_params``/``best_gnets``/``best_accuracy``: the generated network with the
+    highest validation accuracy so far; ``fit_mse``: the last fit's largest error;
+    ``rounds``: write-backs done; ``key``: for synapse sampling.
     """
 
     pnet: TrainState
@@ -175,8 +199,11 @@ class DGBState:
 
 
 class DGB:
-    """The codes, optimizers and jitted functions of a DGB for one config and data shape.
+    """The codes, layout, optimizers and jitted functions of a DGB for one config and data
+    shape.
 
+    ``specs`` are its g-nets (``sgb.dgb_layout.gnet_specs``) and ``groups`` the indices of
+    those fitted together, each with its own optimizer and ``steps`` per round.
     ``pnet_step`` and ``write_back_step`` are the compiled steps; both donate the state.
     """
 
@@ -184,6 +211,15 @@ class DGB:
         self.config = config
         self.sizes = dense_sizes(input_shape, config.conv_features, config.hidden, num_classes)
         self.codes = [jnp.asarray(c) for c in layer_codes(self.sizes)]
+        self.specs = gnet_specs(self.sizes, config.gnet_width, config.layout)
+        if config.layout == "ours":
+            self.groups = [list(range(len(self.specs)))]
+            self.steps = [config.gnet_steps]
+        else:
+            self.groups = [[i] for i in range(len(self.specs))]
+            self.steps = [
+                s.epochs * -(-entries(s, self.sizes) // self._batch(s)) for s in self.specs
+            ]
         self.model = DenseClassifier(
             (*config.hidden, num_classes), config.conv_features, tuple(input_shape)
         )
@@ -191,23 +227,30 @@ class DGB:
         self.pnet_step = jax.jit(pnet_step, donate_argnums=0)
         self.write_back_step = jax.jit(self.write_back, donate_argnums=0)
 
+    def _batch(self, spec: GNetSpec) -> int:
+        """Entries per fitting minibatch: ``gnet_batch`` (drawn with replacement), under the
+        authors' layout all of them if fewer (their ``Batch_Size = min(1000, n)``)."""
+        if self.config.layout == "ours":
+            return self.config.gnet_batch
+        return min(self.config.gnet_batch, entries(spec, self.sizes))
+
     def init(self, x: np.ndarray) -> DGBState:
-        """Initial state: a random p-net overwritten by fresh g-nets' kernels."""
+        """Initial state: a random p-net overwritten by fresh g-nets' parameters."""
         pnet_key, gnet_key, key = jax.random.split(jax.random.key(self.config.seed), 3)
         params = self.model.init(pnet_key, x[:1])
         pnet = adam_state(self.model.apply, params, self.config.learning_rate)
-        hidden = dgb_gnet_hidden(self.config.gnet_width)
-        keys = jax.random.split(gnet_key, len(self.codes) - 1)
+        dims = [c.shape[1] for c in self.codes]
+        keys = jax.random.split(gnet_key, len(self.specs))
         gnets = [
-            init_gnet(k, a.shape[1] + b.shape[1], hidden)
-            for k, a, b in zip(keys, self.codes[:-1], self.codes[1:], strict=True)
+            init_gnet(k, input_dim(s, dims), s.hidden)
+            for k, s in zip(keys, self.specs, strict=True)
         ]
-        pnet = pnet.replace(params=with_kernels(params, self.generate(gnets)))
+        pnet = pnet.replace(params=self.with_generated(params, gnets))
         copy = partial(jax.tree_util.tree_map, jnp.copy)  # own buffers, so steps can donate
         return DGBState(
             pnet=pnet,
             gnets=gnets,
-            gnet_opt=self.gnet_tx.init(gnets),
+            gnet_opt=[self.gnet_tx.init([gnets[i] for i in group]) for group in self.groups],
             best_params=copy(pnet.params),
             best_gnets=copy(gnets),
             best_accuracy=jnp.asarray(-1.0, jnp.float32),  # strong types, as steps return them
@@ -216,42 +259,63 @@ class DGB:
             key=key,
         )
 
-    def generate(self, gnets: list[GNetParams]) -> list[jnp.ndarray]:
-        """Every layer's kernel as the g-nets encode it."""
-        return [
-            generate_kernel(g, a, b)
-            for g, a, b in zip(gnets, self.codes[:-1], self.codes[1:], strict=True)
-        ]
+    def generate(self, spec: GNetSpec, gnet: GNetParams) -> jnp.ndarray:
+        """What one g-net encodes: its layer's kernel (n_pre, n_post) or biases (n_post,)."""
+        post = self.codes[spec.layer + 1]
+        if spec.target == "kernel":
+            return generate_kernel(gnet, self.codes[spec.layer], post)
+        return generate_biases(gnet, post)
 
-    def _fit_loss(self, gnets, kernels, key) -> jnp.ndarray:
-        keys = jax.random.split(key, len(gnets))
-        losses = [
-            fit_loss(g, a, b, k, layer_key, self.config.gnet_batch)
-            for g, a, b, k, layer_key in zip(
-                gnets, self.codes[:-1], self.codes[1:], kernels, keys, strict=True
-            )
-        ]
+    def with_generated(self, params: Any, gnets: list[GNetParams]) -> Any:
+        """``params`` of the p-net with every generated parameter replaced by its g-net's."""
+        inner = dict(params["params"])
+        for spec, gnet in zip(self.specs, gnets, strict=True):
+            name = f"dense_{spec.layer}"
+            inner[name] = {**inner[name], spec.target: self.generate(spec, gnet)}
+        return {**params, "params": inner}
+
+    def _fit_loss(self, group: list[int], gnets, targets, key) -> jnp.ndarray:
+        """Mean over the group's g-nets of each one's fitting error to its target."""
+        keys = jax.random.split(key, len(group))
+        losses = []
+        for i, gnet, layer_key in zip(group, gnets, keys, strict=True):
+            spec, post = self.specs[i], self.codes[self.specs[i].layer + 1]
+            if spec.target == "kernel":
+                pre = self.codes[spec.layer]
+                losses.append(fit_loss(gnet, pre, post, targets[i], layer_key, self._batch(spec)))
+            else:
+                losses.append(bias_fit_loss(gnet, post, targets[i], layer_key, self._batch(spec)))
         return sum(losses) / len(losses)
 
     def write_back(self, state: DGBState, x_val: jnp.ndarray, y_val: jnp.ndarray) -> DGBState:
-        """Fit the g-nets to the p-net's kernels, write their kernels back, keep the best."""
-        kernels = [
-            state.pnet.params["params"][f"dense_{i}"]["kernel"] for i in range(len(self.codes) - 1)
-        ]
+        """Fit the g-nets to the p-net's parameters, write theirs back, keep the best."""
+        inner = state.pnet.params["params"]
+        targets = [inner[f"dense_{s.layer}"][s.target] for s in self.specs]
         key, fit_key = jax.random.split(state.key)
-
-        def step(carry, step_key):
-            gnets, opt = carry
-            loss, grads = jax.value_and_grad(self._fit_loss)(gnets, kernels, step_key)
-            updates, opt = self.gnet_tx.update(grads, opt, gnets)
-            return (optax.apply_updates(gnets, updates), opt), loss
-
-        (gnets, opt), losses = jax.lax.scan(
-            step,
-            (state.gnets, state.gnet_opt),
-            jax.random.split(fit_key, self.config.gnet_steps),
+        group_keys = (
+            [fit_key] if len(self.groups) == 1 else jax.random.split(fit_key, len(self.groups))
         )
-        params = with_kernels(state.pnet.params, self.generate(gnets))
+        gnets, opts, last = list(state.gnets), [], []
+        for group, steps, opt, group_key in zip(
+            self.groups, self.steps, state.gnet_opt, group_keys, strict=True
+        ):
+
+            def step(carry, step_key, group=group):
+                fitted, opt = carry
+                loss, grads = jax.value_and_grad(
+                    lambda g: self._fit_loss(group, g, targets, step_key)
+                )(fitted)
+                updates, opt = self.gnet_tx.update(grads, opt, fitted)
+                return (optax.apply_updates(fitted, updates), opt), loss
+
+            (fitted, opt), losses = jax.lax.scan(
+                step, ([gnets[i] for i in group], opt), jax.random.split(group_key, steps)
+            )
+            for i, gnet in zip(group, fitted, strict=True):
+                gnets[i] = gnet
+            opts.append(opt)
+            last.append(losses[-1])
+        params = self.with_generated(state.pnet.params, gnets)
         score = accuracy(self.model.apply(params, x_val), y_val)
         better = score > state.best_accuracy
 
@@ -261,11 +325,11 @@ class DGB:
         return state.replace(
             pnet=state.pnet.replace(params=params),
             gnets=gnets,
-            gnet_opt=opt,
+            gnet_opt=opts,
             best_params=pick(params, state.best_params),
             best_gnets=pick(gnets, state.best_gnets),
             best_accuracy=jnp.maximum(score, state.best_accuracy),
-            fit_mse=losses[-1],
+            fit_mse=jnp.max(jnp.stack(last)),
             rounds=state.rounds + 1,
             key=key,
         )

@@ -7,13 +7,20 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from sgb.compression import dgb_gnet_count, dgb_gnet_hidden, tree_param_count
+from sgb.compression import (
+    authors_nominal_width,
+    compression,
+    dgb_gnet_count,
+    dgb_param_count,
+    tree_param_count,
+)
 from sgb.data import Dataset, load
 from sgb.dgb import (
     DGB,
     DGBConfig,
     binary_codes,
     fit_loss,
+    generate_biases,
     generate_kernel,
     init_gnet,
     layer_codes,
@@ -44,7 +51,7 @@ def _direct(layers, pre, post):
 
 def test_generated_kernel_is_the_gnet_on_every_synapse_scaled_by_fan_in():
     pre, post = jnp.asarray(binary_codes(37)), jnp.eye(5)
-    layers = init_gnet(jax.random.key(0), pre.shape[1] + post.shape[1], dgb_gnet_hidden(9))
+    layers = init_gnet(jax.random.key(0), pre.shape[1] + post.shape[1], (9, 10))
     kernel = generate_kernel(layers, pre, post)
     assert kernel.shape == (37, 5)
     np.testing.assert_allclose(kernel, _direct(layers, pre, post) / np.sqrt(37), atol=1e-5)
@@ -58,7 +65,7 @@ def test_gnet_fit_reproduces_a_kernel_that_is_a_function_of_the_codes():
         post
     ) @ [0.5, -1.0, 0.2, 0.4]
     target = jnp.asarray(rule / np.sqrt(32), jnp.float32)
-    layers = init_gnet(jax.random.key(1), 9, dgb_gnet_hidden(32))
+    layers = init_gnet(jax.random.key(1), 9, (32, 10))
     tx = optax.adam(3e-3)
     opt = tx.init(layers)
 
@@ -76,10 +83,31 @@ def test_gnet_fit_reproduces_a_kernel_that_is_a_function_of_the_codes():
     assert error < 0.01 * first
 
 
-def test_gnet_parameters_are_what_the_compression_counts():
-    dgb = DGB(DGBConfig(hidden=(12,), gnet_width=7), (20,), 5)
+@pytest.mark.parametrize("layout", ["ours", "authors"])
+def test_gnet_parameters_are_what_the_compression_counts(layout):
+    dgb = DGB(DGBConfig(hidden=(12,), gnet_width=7, layout=layout), (20,), 5)
     state = dgb.init(np.zeros((1, 20), np.float32))
-    assert tree_param_count(state.gnets) == dgb_gnet_count((20, 12, 5), (7, 10))
+    assert tree_param_count(state.gnets) == dgb_gnet_count((20, 12, 5), 7, layout)
+    # the p-net's biases not generated are stored: the output layer's (and, ours, all)
+    stored = 5 if layout == "authors" else 12 + 5
+    assert dgb_param_count((20, 12, 5), 7, layout) == tree_param_count(state.gnets) + stored
+
+
+def test_the_authors_layout_counts_as_their_code_and_their_nominal_ratio_overstates_it():
+    # their MNIST DGB (784 -> 800 -> 10), first g-net 20 -> h -> 10 -> 1, the hidden biases'
+    # 10 -> 10 -> 1, the output kernel's 20 -> 30 -> 1, the output biases stored:
+    # 31 h + 21 + 121 + 661 + 10 parameters
+    sizes = (784, 800, 10)
+    for h in (1, 10, 100):
+        assert dgb_param_count(sizes, h, "authors") == 31 * h + 813
+    # their width for a nominal ratio r is round((p - 20 r) / (60 r)); at r = 30 that
+    # network is compressed about 54 times, at r = 1500 about 617 times
+    assert authors_nominal_width(sizes, 30) == round((784 * 800 + 800 + 8010 - 600) / 1800)
+    real = {
+        r: compression("dgb", sizes, authors_nominal_width(sizes, r), 30, 10, layout="authors")
+        for r in (30, 1500)
+    }
+    assert 50 < real[30] < 58 and 600 < real[1500] < 640
 
 
 def _toy(n=96):
@@ -101,20 +129,31 @@ _TINY = DGBConfig(
 )
 
 
-def test_training_state_is_explicit_and_the_innate_network_is_the_best_generated_one():
+@pytest.mark.parametrize("layout", ["ours", "authors"])
+def test_training_state_is_explicit_and_the_innate_network_is_the_best_generated_one(layout):
     data = _toy()
-    config = dataclasses.replace(_TINY, gnet_width=4)
+    config = dataclasses.replace(_TINY, gnet_width=4, layout=layout)
     dgb, state, history = train_dgb(config, data, progress=False)
     assert int(state.rounds) == 3 and len(history) >= 1
-    for i, kernel in enumerate(dgb.generate(state.best_gnets)):
+    best = state.best_params["params"]
+    generated = dgb.with_generated(state.best_params, state.best_gnets)["params"]
+    for spec in dgb.specs:
+        name = f"dense_{spec.layer}"
+        np.testing.assert_allclose(best[name][spec.target], generated[name][spec.target], atol=1e-6)
+    if layout == "authors":
+        # the hidden biases come from their g-net, fitted on its 8 entries 3 times a round
+        assert [s.target for s in dgb.specs] == ["kernel", "bias", "kernel"]
+        assert dgb.steps == [6 * 8 // 16, 3, 8 * 2 // 16]
         np.testing.assert_allclose(
-            state.best_params["params"][f"dense_{i}"]["kernel"], kernel, atol=1e-6
+            best["dense_0"]["bias"], generate_biases(state.best_gnets[1], dgb.codes[1]), atol=1e-6
         )
     assert np.isfinite(float(state.fit_mse))
     assert 0.0 <= float(state.best_accuracy) <= 1.0
     assert 0.0 <= dense_accuracy(dgb.model, state.best_params, data.x_test, data.y_test) <= 1.0
     with pytest.raises(ValueError, match="rounds"):
         DGBConfig(rounds=0)
+    with pytest.raises(ValueError, match="layout"):
+        DGBConfig(layout="theirs")
 
 
 def test_dgb_accuracy_on_digits_rises_with_gnet_width_at_low_compression():

@@ -95,6 +95,18 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu run (the same config)",
         },
     ),
+    "dgb_full": Experiment(
+        "dgb_full",
+        figure="Fig. 2's DGB as the authors ran it (their g-net layout, 500 rounds, best "
+        "validation) at 200x, 400x and 700x, 3 seeds (chapter 4)",
+        inputs="fashion-mnist (cpu and paper), digits (smoke)",
+        costs={
+            "smoke": "one cell of 4 rounds, not measured",
+            "cpu": "9 cells, each about 45 minutes of 2 CPU cores (not yet measured); "
+            "resumable, and several processes share it",
+            "paper": "the cpu run (the same config)",
+        },
+    ),
     "fig3": Experiment(
         "rl",
         "run_fig3",

@@ -24,7 +24,7 @@ from pathlib import Path
 from tqdm.auto import tqdm
 
 from sgb import resume, validation
-from sgb.classifiers import dense_sizes, with_kernels
+from sgb.classifiers import dense_sizes
 from sgb.compression import CONVENTIONS, compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.dgb import DGB, DGBConfig, dgb_for, train_dgb
@@ -70,14 +70,15 @@ class BudgetConfig:
 
 def sizes_and_width(config: BudgetConfig, data: Dataset) -> tuple[tuple[int, ...], int]:
     """The dense layer sizes on ``data`` and the g-net width whose compression (our
-    convention) is nearest ``config.ratio``."""
+    convention, the DGB's layout) is nearest ``config.ratio``."""
     sizes = dense_sizes(data.x_train.shape[1:], (), config.dgb.hidden, data.num_classes)
-    return sizes, setting_for_ratio("dgb", sizes, config.ratio, *config.types)
+    layout = config.dgb.layout
+    return sizes, setting_for_ratio("dgb", sizes, config.ratio, *config.types, layout=layout)
 
 
 def _generated_accuracy(dgb: DGB, state, data: Dataset) -> float:
     """Test accuracy of the network the g-nets generate now (biases from the p-net)."""
-    params = with_kernels(state.pnet.params, dgb.generate(state.gnets))
+    params = dgb.with_generated(state.pnet.params, state.gnets)
     return dense_accuracy(dgb.model, params, data.x_test, data.y_test)
 
 
@@ -188,7 +189,9 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
             "dataset": config.dataset,
             "sizes": list(sizes),
             **{
-                f"compression_{c}": compression("dgb", sizes, width, *config.types, c)
+                f"compression_{c}": compression(
+                    "dgb", sizes, width, *config.types, c, config.dgb.layout
+                )
                 for c in CONVENTIONS
             },
             "records": [],

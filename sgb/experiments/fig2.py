@@ -96,9 +96,12 @@ def sweep_cells(sweep: CompressionSweep, sizes: tuple[int, ...]) -> list[tuple[s
         if kind == "dense":
             settings = [0]
         else:
+            layout = sweep.dgb.layout
             settings = sorted(
                 {
-                    setting_for_ratio(kind, sizes, r, sweep.in_types, sweep.out_types)
+                    setting_for_ratio(
+                        kind, sizes, r, sweep.in_types, sweep.out_types, layout=layout
+                    )
                     for r in sweep.ratios
                 }
             )
@@ -134,10 +137,13 @@ def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: Compressio
         record["accuracy"] = out["accuracy"]
     if kind == "dgb":
         record |= {"validation_accuracy": out["validation_accuracy"], "fit_mse": out["fit_mse"]}
+        record["layout"] = sweep.dgb.layout
     record["at_chance"] = out["at_chance"]
     record["final_loss"] = out["history"][-1]["loss"]
     for convention, key in _RATIO_KEYS.items():
-        record[key] = compression(kind, sizes, setting, sweep.in_types, sweep.out_types, convention)
+        record[key] = compression(
+            kind, sizes, setting, sweep.in_types, sweep.out_types, convention, sweep.dgb.layout
+        )
     record["git_commit"] = git_commit()
     record["wall_time_s"] = round(time.perf_counter() - start, 2)
     return record

@@ -1,0 +1,141 @@
+"""Figure 2's DGB as the authors ran it, at the high compressions where the SGB is said
+to win: their layout (``sgb.dgb_layout``), their full budget, several seeds.
+
+Each cell (compression ratio, our convention, and seed) trains one DGB of the authors'
+layout for 500 rounds of 100 p-net minibatches and one epoch of g-net fitting, keeping
+the generated network of best validation accuracy (``sgb.experiments.dgb_budget``'s
+chunked, resumable training, one state file per cell). The ratios are Figure 2's
+highest, 200, 400 and 700 times. Each cell records its compression under both
+conventions and the authors' nominal ratio for its width
+(``sgb.compression.authors_nominal_width``'s inverse: p / (60 h + 20)).
+
+Cells run seed by seed, each under a lock (``sgb.runlock``), so several processes can
+share the sweep; the results file is written after every chunk of every cell.
+"""
+
+import dataclasses
+from pathlib import Path
+
+from tqdm.auto import tqdm
+
+from sgb import runlock, validation
+from sgb.compression import CONVENTIONS, compression, dense_param_count
+from sgb.data import load
+from sgb.dgb import DGBConfig
+from sgb.experiments import PROFILE_NAMES, check_profile
+from sgb.experiments.dgb_budget import BudgetConfig, sizes_and_width, train_with_budget
+from sgb.provenance import earlier_results, provenance, results_file, write_results
+
+
+@dataclasses.dataclass(frozen=True)
+class FullBudgetSweep:
+    """The cells: every ``ratios`` x ``seeds`` DGB of ``dgb`` trained on ``dataset``."""
+
+    dataset: str
+    ratios: tuple[float, ...]
+    seeds: tuple[int, ...]
+    dgb: DGBConfig
+    chunk_rounds: int
+
+    def __post_init__(self) -> None:
+        for ratio in self.ratios:
+            validation.positive("ratio", ratio)
+        validation.integers("seeds", self.seeds, minimum=0)
+
+    def cells(self) -> list[BudgetConfig]:
+        """Every cell's config, seed by seed (all ratios' seed 0 first)."""
+        return [
+            BudgetConfig(
+                self.dataset, ratio, dataclasses.replace(self.dgb, seed=seed), self.chunk_rounds
+            )
+            for seed in self.seeds
+            for ratio in self.ratios
+        ]
+
+
+PROFILES = {
+    "smoke": FullBudgetSweep(
+        "digits",
+        (4.0,),
+        (0,),
+        DGBConfig(
+            hidden=(64,),
+            rounds=4,
+            pnet_steps=5,
+            batch_size=32,
+            validation_size=200,
+            layout="authors",
+        ),
+        chunk_rounds=2,
+    ),
+    **{
+        p: FullBudgetSweep(
+            "fashion-mnist",
+            (200.0, 400.0, 700.0),
+            (0, 1, 2),
+            DGBConfig(rounds=500, layout="authors"),
+            chunk_rounds=25,
+        )
+        for p in PROFILE_NAMES[1:]
+    },
+}
+
+
+def cell_name(cell: BudgetConfig) -> str:
+    return f"ratio{cell.ratio:g}_seed{cell.dgb.seed}"
+
+
+def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
+    """Train every cell not finished yet; a finished cell is read back, not trained again."""
+    sweep = PROFILES[check_profile(profile)]
+    path = results_file(out_dir, f"dgb_full_{sweep.dataset}", profile)
+    data = load(sweep.dataset, seed=0)
+    for cell in sweep.cells():
+        name = cell_name(cell)
+        state_file = path.with_name(f"{path.stem}_{name}.state.npz")
+        with runlock.claim(state_file) as mine:
+            results = earlier_results(path, sweep) or {"dataset": sweep.dataset, "cells": {}}
+            chunks = cell.dgb.rounds // cell.chunk_rounds
+            if not mine or len(results["cells"].get(name, {}).get("records", [])) == chunks:
+                continue
+            sizes, width = sizes_and_width(cell, data)
+            record = {
+                "ratio": cell.ratio,
+                "seed": cell.dgb.seed,
+                "layout": cell.dgb.layout,
+                "gnet_width": width,
+                **{
+                    f"compression_{c}": compression(
+                        "dgb", sizes, width, *cell.types, c, cell.dgb.layout
+                    )
+                    for c in CONVENTIONS
+                },
+                "nominal_ratio": dense_param_count(sizes) / (60 * width + 20),
+                "records": [],
+            }
+            for chunk in tqdm(
+                train_with_budget(cell, data, state_file),
+                desc=f"DGB {name}",
+                total=chunks,
+                disable=not progress,
+            ):
+                record["records"].append(chunk)
+                results = earlier_results(path, sweep) or results
+                results["cells"][name] = record
+                _write(path, results, sweep, profile)
+            state_file.unlink(missing_ok=True)
+    return _write(path, earlier_results(path, sweep) or {"cells": {}}, sweep, profile)
+
+
+def _write(path: Path, results: dict, sweep: FullBudgetSweep, profile: str) -> Path:
+    cells = results["cells"].values()
+    chunks = [c for cell in cells for c in cell["records"]]
+    results["complete"] = all(
+        len(results["cells"].get(cell_name(c), {}).get("records", []))
+        == c.dgb.rounds // c.chunk_rounds
+        for c in sweep.cells()
+    )
+    seeds = sorted({cell["seed"] for cell in cells})
+    record = provenance(sweep, profile, seeds, sum(c["wall_time_s"] for c in chunks))
+    record["git_commits"] = sorted({c["git_commit"] for c in chunks})
+    return write_results(path, results, record)
