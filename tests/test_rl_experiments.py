@@ -10,6 +10,7 @@ from reach import EPISODE, SHARED_STEP, shared_step_config
 from sgb.experiments import get_experiment, rl, rl_spread
 from sgb.provenance import read_results
 from sgb.rl.agent import NetworkConfig
+from sgb.rl.regimes import with_settings
 
 
 def test_summary_divides_by_the_mean_vanilla_return():
@@ -38,15 +39,15 @@ def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
     assert {(s, k) for s, k, _ in runs if k is None} == {("ours", None)}
     assert [seed for *_, seed in runs] == sorted(seed for *_, seed in runs)  # seed by seed
     net16 = replace(config.ppo, network=NetworkConfig(cell_types=16))
-    authors = rl.with_settings(net16, "authors")
+    authors = with_settings(net16, "authors")
     assert authors.kl_coef == 0.0 and authors.network.rho_init == -7.0
     assert authors.network.typed_inputs and authors.network.sgb_output
     assert authors.network.prior == "gaussian"
-    assert rl.with_settings(config.ppo, "authors") == config.ppo  # vanilla has no genome
+    assert with_settings(config.ppo, "authors") == config.ppo  # vanilla has no genome
     # the ablations swap the input typing and nothing else
-    untyped = rl.with_settings(net16, "authors_untyped_inputs")
+    untyped = with_settings(net16, "authors_untyped_inputs")
     assert untyped == replace(authors, network=replace(authors.network, typed_inputs=False))
-    typed = rl.with_settings(net16, "ours_typed_inputs")
+    typed = with_settings(net16, "ours_typed_inputs")
     assert typed == replace(net16, network=replace(net16.network, typed_inputs=True))
     names = {rl.checkpoint_name("ant", k, seed, "cpu", s) for s, k, seed in runs}
     assert len(names) == len(runs)

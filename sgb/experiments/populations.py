@@ -59,10 +59,11 @@ from scipy import stats as scipy_stats
 
 from sgb import validation, verdicts
 from sgb.experiments import PROFILE_NAMES, check_profile
-from sgb.experiments.rl import SETTINGS, checkpoint_name, checkpoint_root, load_agent
+from sgb.experiments.rl import checkpoint_name, checkpoint_root, load_agent
 from sgb.provenance import earlier_results, git_commit, provenance, results_file, write_results
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.rl.population import population_returns
+from sgb.rl.regimes import SETTINGS
 
 BODIES = ("normal", "long_legs")
 PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body

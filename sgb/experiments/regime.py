@@ -2,7 +2,7 @@
 
 Vanilla PPO and the authors' genome at 64 types first (seed 0, then more seeds), then 128
 and 16 types (seed 0): every run of ``sgb.rl.regimes.authors_regime``, the SGB runs with
-the authors' genome (``sgb.experiments.rl.with_settings(..., "authors")``). The vanilla
+the authors' genome (``sgb.rl.regimes.with_settings(..., "authors")``). The vanilla
 network has the SGB's width, 128 (their ``ant_vanilla.yaml`` has 64 and 10^8 steps), so
 that the comparison isolates the bottleneck at one budget. Each run is evaluated as the
 authors evaluate (``sgb.rl.trainer.Trainer.window_return``), and its return is also
@@ -26,12 +26,11 @@ from sgb.experiments.rl import (
     ppo_settings,
     seed_sem,
     trained_run,
-    with_settings,
 )
 from sgb.provenance import provenance, results_file, write_results
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
-from sgb.rl.regimes import authors_regime, authors_scale
+from sgb.rl.regimes import authors_regime, authors_scale, with_settings
 
 
 @dataclass(frozen=True)

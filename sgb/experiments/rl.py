@@ -27,14 +27,10 @@ from sgb.rl.envs import EnvSpec
 from sgb.rl.normalizer import Normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig, train
+from sgb.rl.regimes import ABLATIONS, SETTINGS, with_settings
 
 CHECKPOINT_DIR = Path("rl") / "checkpoints"
 BACKENDS = {"ant": "spring", "halfcheetah": "spring"}
-
-
-SETTINGS = ("ours", "authors")
-# the typing ablation of chapter 5: each settings with the other's input typing
-ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs")
 
 
 @dataclass(frozen=True)
@@ -66,33 +62,6 @@ class CellTypeSweep:
     def seeds(self) -> tuple[int, ...]:
         """Every seed any point runs, ascending."""
         return tuple(sorted({seed for p in self.points for seed in p.seeds}))
-
-
-def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
-    """``ppo`` under our genome settings (unchanged) or the authors' (their public code,
-    ``RL/custom_layers.py``, ``RL/models.py``, ``RL/configs/*.yaml``): every layer an SGB
-    layer, the observation entries and outputs typed too; type means drawn from N(0, 0.1);
-    rho_init -7 (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0 on the Ant, 1e-4 on
-    the HalfCheetah. The PPO itself stays ours (see chapter 5).
-
-    The ablations swap one difference: ``"ours_typed_inputs"`` is ours with the
-    observation entries typed, ``"authors_untyped_inputs"`` the authors' with one type
-    per observation entry.
-    """
-    validation.choice("settings", settings, SETTINGS + ABLATIONS)
-    if settings == "ours" or not ppo.network.sgb:
-        return ppo
-    if settings == "ours_typed_inputs":
-        return replace(ppo, network=replace(ppo.network, typed_inputs=True))
-    network = replace(
-        ppo.network,
-        typed_inputs=settings == "authors",
-        sgb_output=True,
-        mean_init=0.1,
-        rho_init=-7.0,
-        prior="gaussian",
-    )
-    return replace(ppo, network=network, kl_coef=0.0 if ppo.env.name == "ant" else 1e-4)
 
 
 @dataclass(frozen=True)

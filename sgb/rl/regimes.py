@@ -1,4 +1,5 @@
-"""The authors' training regime, as their public code runs it, and their Figure 3 scale.
+"""The authors' genome settings and training regime, as their public code has them, and
+their Figure 3 scale.
 
 Read from ``self-supervisor/genomic_bottleneck_v2`` at commit 7effad6: the PPO settings
 from ``RL/configs/ant.yaml`` and ``RL/configs/halfcheetah.yaml``; the regime
@@ -7,8 +8,9 @@ environment, and a fresh draw in the loss; resets on the spot; their evaluation)
 ``RL/training_torch.py`` and ``RL/models.py``; the Bayesian biases from
 ``RL/custom_layers.py`` (``BayesianLinear``, ``bias_sampler``). Their ``batch_size`` x
 ``num_minibatches`` sequences per iteration are ``unrolls_per_iteration`` unrolls of
-every environment here. The genome itself (every layer typed, rho -7, ...) is a separate
-choice, ``sgb.experiments.rl.with_settings(..., "authors")``.
+every environment here. The genome (every layer typed, rho -7, ...) is a separate choice,
+``with_settings(..., "authors")``, as is the regime: the book trains either genome under
+either.
 """
 
 from dataclasses import replace
@@ -16,6 +18,9 @@ from dataclasses import replace
 from sgb import validation
 from sgb.rl.ppo import PPOConfig
 
+SETTINGS = ("ours", "authors")
+# the typing ablation of chapter 5: each settings with the other's input typing
+ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs")
 _ENVS = 2048
 _MINIBATCHES = 32
 # per environment: (batch_size, num_update_epochs, unroll_length, entropy_cost,
@@ -26,6 +31,33 @@ _YAML = {
 }
 # Figure 3's y-axis in their code (``proportion_of_max_score``): (R - min) / (SOTA - min)
 FIG3_SCALE = {"ant": (-724.0, 8706.0), "halfcheetah": (-724.0, 4838.0)}
+
+
+def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
+    """``ppo`` under our genome settings (unchanged) or the authors' (their public code,
+    ``RL/custom_layers.py``, ``RL/models.py``, ``RL/configs/*.yaml``): every layer an SGB
+    layer, the observation entries and outputs typed too; type means drawn from N(0, 0.1);
+    rho_init -7 (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0 on the Ant, 1e-4 on
+    the HalfCheetah. The training regime is a separate choice (``authors_regime``).
+
+    The ablations swap one difference: ``"ours_typed_inputs"`` is ours with the
+    observation entries typed, ``"authors_untyped_inputs"`` the authors' with one type
+    per observation entry.
+    """
+    validation.choice("settings", settings, SETTINGS + ABLATIONS)
+    if settings == "ours" or not ppo.network.sgb:
+        return ppo
+    if settings == "ours_typed_inputs":
+        return replace(ppo, network=replace(ppo.network, typed_inputs=True))
+    network = replace(
+        ppo.network,
+        typed_inputs=settings == "authors",
+        sgb_output=True,
+        mean_init=0.1,
+        rho_init=-7.0,
+        prior="gaussian",
+    )
+    return replace(ppo, network=network, kl_coef=0.0 if ppo.env.name == "ant" else 1e-4)
 
 
 def authors_regime(ppo: PPOConfig) -> PPOConfig:
