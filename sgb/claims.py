@@ -23,9 +23,6 @@ from sgb import verdicts
 from sgb.provenance import read_results
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 
-# the authors' Figure 3 scale (RL/training_torch.py, RL/plot.py of their repository)
-AUTHORS_SCALE = {"ant": (-724.0, 8706.0), "halfcheetah": (-724.0, 4838.0)}
-
 
 # what each claim's test estimates, by key prefix
 EFFECTS = {
