@@ -23,7 +23,6 @@ from sgb import verdicts
 from sgb.provenance import read_results
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 
-
 # what each claim's test estimates, by key prefix
 EFFECTS = {
     "fig2.dgb_better_low": "DGB - SGB accuracy (points)",
