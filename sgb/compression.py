@@ -190,6 +190,18 @@ def authors_nominal_width(sizes: Sequence[int], ratio: float) -> int:
     return int(np.round((p - 20 * validation.positive("ratio", ratio)) / (60 * ratio)))
 
 
+def nominal_ratio_table(sizes: Sequence[int], nominal: Sequence[float]) -> list[dict]:
+    """For each of the authors' nominal DGB ratios: the width their script builds
+    (``authors_nominal_width``) and that network's compression under both conventions,
+    laid out as theirs is."""
+    rows = []
+    for ratio in nominal:
+        width = authors_nominal_width(sizes, ratio)
+        real = {c: compression("dgb", sizes, width, 1, 1, c, "authors") for c in CONVENTIONS}
+        rows.append({"nominal": ratio, "gnet_width": width, **real})
+    return rows
+
+
 def hidden_types_sweep(
     sizes: Sequence[int],
     hidden_types: Sequence[int],
