@@ -3,9 +3,12 @@
 Results go to ``--out-dir``, else ``$SGB_RESULTS``, else ``./sgb-results``. The committed
 results (``sgb.paths.committed_results()``) are written only with
 ``--maintainer-write-committed``; an ``--out-dir`` inside them is refused without it.
+A sweep that shares its runs out may run as several workers on Ray (``sgb.cluster``):
+``--workers N`` on a local cluster, ``--ray ADDRESS`` on an existing one.
 """
 
 import argparse
+import functools
 import inspect
 import os
 import sys
@@ -13,6 +16,7 @@ import textwrap
 from collections.abc import Callable
 from pathlib import Path
 
+from sgb import cluster, validation
 from sgb.divergence import TrainingDiverged
 from sgb.experiments import EXPERIMENTS, PROFILE_NAMES, get_experiment
 from sgb.paths import committed_results
@@ -124,7 +128,37 @@ def build_parser() -> argparse.ArgumentParser:
     )
     reproduce.add_argument("--dataset", help="dataset, for experiments that take one")
     reproduce.add_argument("--env", help="environment, for experiments that take one")
+    reproduce.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="workers sharing the runs of a sweep that shares them (fig3, regime, dgb_full) "
+        "on Ray (default: one per core on a local cluster where Ray is installed, at the "
+        "cpu and paper profiles; else 1, in this process)",
+    )
+    reproduce.add_argument(
+        "--ray",
+        metavar="ADDRESS",
+        default=None,
+        help="run the workers on the Ray cluster at ADDRESS ('auto': this machine's)",
+    )
     return parser
+
+
+def worker_count(experiment: str, profile: str, workers: int | None, address: str | None) -> int:
+    """How many workers share ``experiment``'s runs: ``workers`` if given; else one per
+    core where Ray is installed and the experiment shares its runs at ``cpu`` or
+    ``paper`` (or on a cluster, ``address``), else 1."""
+    shares = get_experiment(experiment).shares_runs
+    if workers is not None:
+        if workers > 1 and not shares:
+            raise ValueError(f"{experiment} does not share its runs out; run it with --workers 1")
+        return validation.integer("workers", workers)
+    if address is not None and not shares:
+        raise ValueError(f"{experiment} does not share its runs out; run it without --ray")
+    if shares and cluster.available() and (profile != "smoke" or address is not None):
+        return cluster.local_workers()
+    return 1
 
 
 def _files(directory: Path) -> dict[Path, tuple[int, int]]:
@@ -154,7 +188,14 @@ def main(argv: list[str] | None = None) -> int:
                 "earlier run of the same config left there is reused or continued, not redone",
                 flush=True,
             )
-        path = run(args.profile, out_dir, **options)
+        workers = worker_count(args.experiment, args.profile, args.workers, args.ray)
+        if workers > 1 or args.ray is not None:
+            where = args.ray or "a local Ray cluster"
+            print(f"  {workers} workers share the runs, on {where}", flush=True)
+            task = functools.partial(run, args.profile, out_dir, **options)
+            path = cluster.run_workers(task, workers, args.ray)[-1]
+        else:
+            path = run(args.profile, out_dir, **options)
     except (ValueError, TypeError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -29,6 +29,7 @@ class Experiment:
     figure: str = ""  # the paper figure (or the chapter) it reproduces
     inputs: str = ""  # its datasets or environments, and the option that picks one
     costs: dict[str, str] = field(default_factory=dict)  # profile -> what a run costs
+    shares_runs: bool = False  # its runs take locks, so several workers can share it
 
     def _module(self):
         return importlib.import_module(f"sgb.experiments.{self.module}")
@@ -106,6 +107,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "resumable, and several processes share it",
             "paper": "the cpu run (the same config)",
         },
+        shares_runs=True,
     ),
     "fig3": Experiment(
         "rl",
@@ -120,6 +122,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "share a sweep",
             "paper": "55 runs of 50M steps per environment, not measured; needs a GPU",
         },
+        shares_runs=True,
     ),
     "fig4": Experiment(
         "rl",
@@ -169,6 +172,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "yet measured end to end); resumable, and several processes share it",
             "paper": "the cpu runs evaluated over 2048 environments; not measured",
         },
+        shares_runs=True,
     ),
     "populations": Experiment(
         "populations",
