@@ -144,9 +144,21 @@ class Trainer:
             return self.agent.actor.layers(actor_params, self.agent.actor.draw(key))
         return self.agent.actor.layers(actor_params, individual)
 
+    def act(self, actor: Layers, normalizer, state, steps: jnp.ndarray, key: jax.Array):
+        """One step of every environment under the phenotypes ``actor``: sampled pre-tanh
+        actions u and their log-densities, the next states, the steps into each episode,
+        and the done and truncation flags (an episode cut at ``episode_length``)."""
+        loc, scale = self.agent.policy(actor, normalizer, state.obs)
+        u = loc + scale * standard_normal(key, loc.shape)
+        log_prob = tanh_gaussian_log_prob(u, loc, scale)
+        nstate = jax.vmap(self.env.step)(state, jnp.tanh(u))
+        steps = steps + 1.0
+        truncation = jnp.where(steps >= self.settings.episode_length, 1.0 - nstate.done, 0.0)
+        return u, log_prob, nstate, steps, jnp.maximum(nstate.done, truncation), truncation
+
     def unroll(self, ts: TrainState) -> tuple[TrainState, Unroll]:
         """Our regime's unroll: every environment played by its own individual."""
-        env, agent, s = self.env, self.agent, self.settings
+        env, s = self.env, self.settings
         key, k_reset, k_birth, k_act = jax.random.split(ts.key, 4)
         e = s.num_envs
         fresh = ts.finished > 0
@@ -166,13 +178,9 @@ class Trainer:
 
         def step(carry, k):
             state, steps, finished = carry
-            loc, scale = agent.policy(actor, ts.normalizer, state.obs)
-            u = loc + scale * standard_normal(k, loc.shape)
-            log_prob = tanh_gaussian_log_prob(u, loc, scale)
-            nstate = jax.vmap(env.step)(state, jnp.tanh(u))
-            steps = steps + 1.0
-            truncation = jnp.where(steps >= s.episode_length, 1.0 - nstate.done, 0.0)
-            done = jnp.maximum(nstate.done, truncation)
+            u, log_prob, nstate, steps, done, truncation = self.act(
+                actor, ts.normalizer, state, steps, k
+            )
             valid = 1.0 - finished
             out = (state.obs, u, log_prob, nstate.reward, done, truncation, valid)
             return (nstate, steps, jnp.maximum(finished, done)), out
@@ -191,19 +199,14 @@ class Trainer:
         """The authors' regime's environment step ``(state, steps), key -> (state, steps),
         (obs, u, log_prob, reward, done, truncation)``, for states (E,): one actor drawn
         for all E, actions sampled, ended episodes restarted from ``start_state``."""
-        env, agent, s = self.env, self.agent, self.settings
 
         def step(carry, k):
             state, steps = carry
             k_draw, k_u = jax.random.split(k)
             actor = self.acting_actor(params.actor, None, k_draw)
-            loc, scale = agent.policy(actor, normalizer, state.obs)
-            u = loc + scale * standard_normal(k_u, loc.shape)
-            log_prob = tanh_gaussian_log_prob(u, loc, scale)
-            nstate = jax.vmap(env.step)(state, jnp.tanh(u))
-            steps = steps + 1.0
-            truncation = jnp.where(steps >= s.episode_length, 1.0 - nstate.done, 0.0)
-            done = jnp.maximum(nstate.done, truncation)
+            u, log_prob, nstate, steps, done, truncation = self.act(
+                actor, normalizer, state, steps, k_u
+            )
             out = (state.obs, u, log_prob, nstate.reward, done, truncation)
 
             def restart(first, now):
