@@ -4,7 +4,8 @@ Results go to ``--out-dir``, else ``$SGB_RESULTS``, else ``./sgb-results``. The 
 results (``sgb.paths.committed_results()``) are written only with
 ``--maintainer-write-committed``; an ``--out-dir`` inside them is refused without it.
 A sweep that shares its runs out may run as several workers on Ray (``sgb.cluster``):
-``--workers N`` on a local cluster, ``--ray ADDRESS`` on an existing one.
+``--workers N`` on a local cluster, ``--ray ADDRESS`` on an existing one; its runs take
+one XLA thread however many workers share them, so their numbers do not depend on it.
 """
 
 import argparse
@@ -189,6 +190,9 @@ def main(argv: list[str] | None = None) -> int:
                 flush=True,
             )
         workers = worker_count(args.experiment, args.profile, args.workers, args.ray)
+        if get_experiment(args.experiment).shares_runs:
+            # its runs take one XLA thread here as in a worker, so come out the same (sgb.cluster)
+            os.environ["XLA_FLAGS"] = cluster.one_thread(os.environ.get("XLA_FLAGS", ""))
         if workers > 1 or args.ray is not None:
             where = args.ray or "a local Ray cluster"
             print(f"  {workers} workers share the runs, on {where}", flush=True)

@@ -9,7 +9,11 @@ run again, whose lock died with its process, and resumes it from its state file.
 run keeps its own provenance in its checkpoint, and the last worker to finish writes
 the sweep's results file from all of them.
 
-On a local cluster each worker is pinned to one core with one XLA thread:
+Every run of such a sweep takes one XLA thread, in a worker or in this process alike
+(``one_thread``): XLA's multi-threaded CPU kernels add in another order, and a PPO run
+carries that last-bit difference into other returns, so the thread count would
+otherwise decide a run's numbers. On a local cluster each worker is also pinned to one
+core:
 ``benchmarks/bench_parallel.py`` measured two such runs at once on this 2-core machine
 at 2.04 times the throughput of one run alone (Ant PPO), 1.58 times for a Figure 2 cell.
 Ray is an optional extra (``pip install 'sgb-companion[cluster]'``).
@@ -22,6 +26,11 @@ from typing import TypeVar
 
 T = TypeVar("T")
 ONE_THREAD = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+
+
+def one_thread(flags: str) -> str:
+    """``flags`` (an ``XLA_FLAGS`` value) with XLA's CPU kernels held to one thread."""
+    return flags if ONE_THREAD in flags else f"{flags} {ONE_THREAD}".strip()
 
 
 def available() -> bool:
@@ -54,12 +63,11 @@ def run_workers(
     import ray
 
     local = address is None
-    env = {"XLA_FLAGS": f"{os.environ.get('XLA_FLAGS', '')} {ONE_THREAD}".strip()}
     ray.init(
         address=address,
         num_cpus=workers if local else None,
         include_dashboard=False,
-        runtime_env={"env_vars": env} if local else None,
+        runtime_env={"env_vars": {"XLA_FLAGS": one_thread(os.environ.get("XLA_FLAGS", ""))}},
         log_to_driver=True,
     )
     try:

@@ -6,14 +6,16 @@ where it exists, otherwise the one-sample Monte Carlo estimate
 log q(w) - log p(w) at a weight ``w`` drawn from q.
 """
 
+import math
 from dataclasses import dataclass
 
 import jax.numpy as jnp
+import numpy as np
 from jax.scipy.special import logsumexp
 
 from sgb import validation
 
-_LOG_2PI = float(jnp.log(2.0 * jnp.pi))
+_LOG_2PI = math.log(2.0 * math.pi)
 
 
 def gaussian_log_prob(w: jnp.ndarray, mean: jnp.ndarray, sigma: jnp.ndarray) -> jnp.ndarray:
@@ -46,7 +48,7 @@ class ScaleMixturePrior:
 
     pi: float = 0.5
     sigma1: float = 1.0
-    sigma2: float = float(jnp.exp(-6.0))
+    sigma2: float = float(np.float32(math.exp(-6.0)))  # e^-6 in float32, as JAX computes it
 
     def __post_init__(self) -> None:
         validation.in_range("pi", self.pi, 0.0, 1.0)

@@ -5,6 +5,8 @@ experiment."""
 import json
 import re
 import shlex
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -124,3 +126,23 @@ def test_the_readme_commands_parse_and_match_the_makefile():
     readme = (ROOT / "README.md").read_text()
     for experiment, args in re.findall(r'make reproduce EXPERIMENT=(\S+) ARGS="([^"]*)"', readme):
         assert f"reproduce {experiment} {args}" in commands, f"no python line for {args}"
+
+
+def test_importing_the_package_starts_no_jax_backend_so_the_cli_sets_xla_threads_in_time():
+    # ``main`` holds a sweep that shares its runs to one XLA thread before the first run;
+    # that takes effect only while no module has started a backend on import
+    modules = sorted(
+        ".".join(p.relative_to(ROOT).with_suffix("").parts)
+        for p in (ROOT / "sgb").rglob("*.py")
+        if p.name != "__init__.py"
+    )
+    code = (
+        "import importlib, sys\n"
+        "from jax._src import xla_bridge\n"
+        f"for name in {modules!r}:\n"
+        "    importlib.import_module(name)\n"
+        "    if xla_bridge.backends_are_initialized():\n"
+        "        sys.exit(f'importing {name} started a JAX backend')\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
