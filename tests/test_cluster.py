@@ -3,7 +3,7 @@ retried, its run resumed, and the results are those of one process.
 
 The sweep here has the protocol of the real ones (a lock per run, ``sgb.runlock``; a
 state file a killed run resumes from; a finished run not redone), with runs cheap
-enough for a test: four runs of three steps, half a second each.
+enough for a test: four runs of three steps, a quarter of a second each.
 """
 
 import json
@@ -44,7 +44,7 @@ def toy_sweep(out: Path, kill_marker: Path | None = None) -> dict[int, float]:
                 if kill_marker is not None and i == 1 and not kill_marker.exists():
                     kill_marker.touch()
                     os.kill(os.getpid(), signal.SIGKILL)
-                time.sleep(0.5)
+                time.sleep(0.25)
             result.write_text(json.dumps(state))
             state_file.unlink()
     return finished(out)
