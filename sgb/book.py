@@ -9,6 +9,7 @@ that runs and cannot drift from it.
 """
 
 import inspect
+import math
 import textwrap
 
 from sgb.claims import Row
@@ -47,5 +48,6 @@ def glue_row(name: str, row: Row) -> None:
     ``{name}_detectable`` and ``{name}_decide``."""
     glue(f"{name}_verdict", f"**{row.verdict}**")
     glue(f"{name}_ours", row.ours)
-    glue(f"{name}_detectable", "-" if row.test is None else f"{row.test.detectable:.3g}")
+    detectable = math.nan if row.test is None else row.test.detectable
+    glue(f"{name}_detectable", "-" if math.isnan(detectable) else f"{detectable:.3g}")
     glue(f"{name}_decide", row.decide or "nothing more")

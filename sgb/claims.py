@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as scipy_stats
 
-from sgb import verdicts
+from sgb import stats, verdicts
 from sgb.provenance import read_results
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 
@@ -28,7 +28,7 @@ EFFECTS = {
     "fig2.dgb_better_low": "DGB - SGB accuracy (points)",
     "fig2.sgb_better_high": "SGB - DGB accuracy (points)",
     "fig2.sgb_declines_slowly": "DGB's decline - SGB's (points)",
-    "fig2.crossover": "both sides",
+    "fig2.crossover": "compression (ours) where the curves first cross",
     "fig2.cifar": "-",
     "fig3.level_128": "1 - fraction of vanilla at 128 types",
     "fig3.fall_16": "fraction of vanilla, 128 - 16 types",
@@ -72,7 +72,9 @@ class Row:
 
 
 def _num(x: float) -> str:
-    """Three significant figures, thousands without a fraction."""
+    """Three significant figures, thousands without a fraction; "-" for no number."""
+    if math.isnan(x):
+        return "-"
     if abs(x) >= 100:
         return f"{x:.0f}"
     return f"{x:.3g}"
@@ -180,9 +182,11 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
     return rows
 
 
-def crossover_row(rows: list[Row]) -> Row:
+def crossover_row(rows: list[Row], results: dict) -> Row:
     """The crossover exists where both sides hold: its verdict combines the rows of the two
-    sides (reproduced only if both are; contradicted if either is)."""
+    sides (reproduced only if both are; contradicted if either is). Its estimate is the
+    ratio (ours) where the mean curves first cross, with the interval of
+    ``sgb.stats.bootstrap_crossing``."""
     sides = [r for r in rows if r.key in ("fig2.dgb_better_low", "fig2.sgb_better_high")]
     found = [r.verdict for r in sides]
     if verdicts.CONTRADICTED in found:
@@ -192,15 +196,29 @@ def crossover_row(rows: list[Row]) -> Row:
     else:
         verdict = verdicts.INCONCLUSIVE
     decide = "" if verdict != verdicts.INCONCLUSIVE else "see the two sides' rows"
+    sgb, dgb = _accuracies(results["records"], "sgb"), _accuracies(results["records"], "dgb")
+    crossing = stats.bootstrap_crossing(sgb, dgb)
+    seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
+    test = verdicts.Test(
+        "t bootstrap of the first crossing",
+        crossing.estimate,
+        crossing.low,
+        crossing.high,
+        math.nan,
+        math.nan,
+        math.nan,
+        seeds,
+    )
     return Row(
         "fig2.crossover",
         "Figure 2",
         "the curves cross: DGB better at low, SGB at high compression",
-        sides[0].setting.split(",")[0] + ", our DGB layout",
+        f"{sides[0].setting.split(',')[0]}, our DGB layout; "
+        f"{crossing.share_crossing:.0%} of simulated curves cross",
         "a crossover",
         None,
         "both sides of the crossover",
-        None,
+        test,
         sides[0].budget,
         verdict,
         decide,
@@ -594,7 +612,7 @@ def scorecard(results_dir: Path) -> list[Row]:
     fig2 = results_dir / "fig2_fashion-mnist_cpu.json"
     if fig2.exists():
         f2 = figure2_rows(read_results(fig2)["results"], "Fashion-MNIST")
-        rows += f2 + [crossover_row(f2)]
+        rows += f2 + [crossover_row(f2, read_results(fig2)["results"])]
     for env in ("ant", "halfcheetah"):
         path = results_dir / "rl" / f"fig3_{env}_cpu.json"
         if path.exists():
@@ -664,6 +682,12 @@ def _trained(results: dict) -> bool:
     return len(vanilla) >= 2 and np.mean(vanilla) > (1000 if results["env"] == "ant" else 100)
 
 
+def _test_name(test: verdicts.Test | None) -> str:
+    if test is None:
+        return "-"
+    return test.name if math.isnan(test.dof) else f"{test.name}, dof {test.dof:.0f}"
+
+
 def table(rows: list[Row]) -> pd.DataFrame:
     """The scorecard as a table: one row per claim and setting."""
     return pd.DataFrame(
@@ -674,7 +698,7 @@ def table(rows: list[Row]) -> pd.DataFrame:
             "paper": r.paper,
             "effect tested": r.effect,
             "ours (95 % CI)": r.ours,
-            "test": "-" if r.test is None else f"{r.test.name}, dof {r.test.dof:.0f}",
+            "test": _test_name(r.test),
             "detectable at 80 % power": "-" if r.test is None else _num(r.test.detectable),
             "paper's effect": "-" if r.paper_effect is None else _num(r.paper_effect),
             "budget": r.budget,

@@ -87,3 +87,81 @@ def one_sample_t(values, reference: float) -> TestResult:
     validation.real("reference", reference)
     result = scipy_stats.ttest_1samp(values, reference)
     return TestResult(float(result.statistic), float(result.pvalue), values.size - 1)
+
+
+def crossings(x_a, y_a, x_b, y_b) -> list[float]:
+    """Where curve a minus curve b changes sign, in x, low to high.
+
+    Each curve is given at its own positive x (for example compression ratios), sorted
+    ascending; both are interpolated linearly in log(x) on the union of their points,
+    within the range both cover, and each sign change is located by linear
+    interpolation of the difference there."""
+    xa, ya, xb, yb = (
+        _as_array(name, v) for name, v in (("x_a", x_a), ("y_a", y_a), ("x_b", x_b), ("y_b", y_b))
+    )
+    if not (xa.ndim == xb.ndim == 1 and xa.shape == ya.shape and xb.shape == yb.shape):
+        raise ValueError("each curve must be two 1-D sequences of the same length, x and y")
+    xa, xb = np.log(xa), np.log(xb)
+    grid = np.unique(np.concatenate([xa, xb]))
+    grid = grid[(grid >= max(xa.min(), xb.min())) & (grid <= min(xa.max(), xb.max()))]
+    diff = np.interp(grid, xa, ya) - np.interp(grid, xb, yb)
+    points = []
+    for i in np.nonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)[0]:
+        t = diff[i] / (diff[i] - diff[i + 1])
+        points.append(float(np.exp(grid[i] + t * (grid[i + 1] - grid[i]))))
+    return points
+
+
+class CrossingInterval(NamedTuple):
+    """The first crossing of two mean curves (``nan`` if they do not cross), the 95 %
+    interval (low, high) of the first crossing over the simulated curves that cross, the
+    share of simulated curves that cross, and the number simulated."""
+
+    estimate: float
+    low: float
+    high: float
+    share_crossing: float
+    draws: int
+
+
+def bootstrap_crossing(
+    a: dict[float, np.ndarray],
+    b: dict[float, np.ndarray],
+    draws: int = 2000,
+    level: float = 0.95,
+    seed: int = 0,
+) -> CrossingInterval:
+    """The first crossing of the mean curves of ``a`` and ``b`` (``crossings``), with a
+    parametric bootstrap interval.
+
+    ``a`` and ``b`` map x (a compression ratio) to the values of the seeds run there, at
+    least two per point. Each simulated curve draws every point's mean from its Student-t
+    sampling distribution (the seeds' mean, their SEM, n - 1 degrees of freedom), point by
+    point and independently. Resampling the seeds instead undercovers at the few seeds
+    sweeps have: on curves with a known crossing it covered it in 77 % of 150 trials at 3
+    seeds and 87 % at 5, the t draws in 99 % and 97 % (the curves of ``tests/test_verdicts``)."""
+    validation.integer("draws", draws)
+    if not 0.0 < validation.real("level", level) < 1.0:
+        raise ValueError(f"level must be in (0, 1), got {level}")
+    curves = []
+    for name, curve in (("a", a), ("b", b)):
+        xs = sorted(curve)
+        values = [_as_1d(f"{name}[{x}]", curve[x]) for x in xs]
+        mean = np.array([v.mean() for v in values])
+        spread = np.array([sem(v) for v in values])
+        dof = np.array([v.size - 1 for v in values])
+        curves.append((np.array(xs), mean, spread, dof))
+    (xa, ma, sa, da), (xb, mb, sb, db) = curves
+    first = crossings(xa, ma, xb, mb)
+    rng = np.random.default_rng(seed)
+    found = []
+    for _ in range(draws):
+        ya = ma + sa * rng.standard_t(da)
+        yb = mb + sb * rng.standard_t(db)
+        points = crossings(xa, ya, xb, yb)
+        if points:
+            found.append(points[0])
+    tail = 100 * (1 - level) / 2
+    low, high = np.percentile(found, [tail, 100 - tail]) if found else (np.nan, np.nan)
+    estimate = first[0] if first else np.nan
+    return CrossingInterval(float(estimate), float(low), float(high), len(found) / draws, draws)

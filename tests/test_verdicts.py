@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats as scipy_stats
 
-from sgb import claims, verdicts
+from sgb import claims, stats, verdicts
 from sgb.paths import committed_results
 from sgb.reliability import episodes_for, projected_reliability, variance_split
 
@@ -190,3 +190,38 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
     for who in (" our genome", " the authors' genome"):
         assert rows["fig5.population_beats_mean", who].verdict == verdicts.REPRODUCED
         assert rows["fig4e.r_legs", who].verdict == verdicts.REPRODUCED
+
+
+def _crossing_curves(rng, seeds: int, noise: float) -> tuple[dict, dict, float]:
+    """Accuracy curves, linear in log(ratio), that cross at ratio 60: a falls faster."""
+    ratios = np.array([10.0, 20.0, 50.0, 100.0, 200.0, 400.0, 700.0])
+    mean_a = 0.9 - 0.05 * np.log(ratios / 60)
+    mean_b = 0.9 - 0.02 * np.log(ratios / 60)
+    a = {x: m + noise * rng.standard_normal(seeds) for x, m in zip(ratios, mean_a, strict=True)}
+    b = {x: m + noise * rng.standard_normal(seeds) for x, m in zip(ratios, mean_b, strict=True)}
+    return a, b, 60.0
+
+
+def test_the_bootstrap_crossing_finds_a_known_crossing_and_its_interval_covers_it():
+    rng = np.random.default_rng(0)
+    a, b, true = _crossing_curves(rng, seeds=3, noise=0.0)
+    exact = stats.bootstrap_crossing(a, b, draws=50)
+    assert exact.estimate == pytest.approx(true) and exact.share_crossing == 1.0
+    assert exact.low == pytest.approx(true) and exact.high == pytest.approx(true)
+    for seeds in (3, 5):
+        covered, widths = [], []
+        for _ in range(60):
+            a, b, true = _crossing_curves(rng, seeds=seeds, noise=0.01)
+            found = stats.bootstrap_crossing(a, b, draws=200, seed=1)
+            covered.append(found.low <= true <= found.high)
+            widths.append(found.high / found.low)
+        assert np.mean(covered) >= 0.9, seeds
+        assert 1.0 < np.median(widths) < (8.0 if seeds == 3 else 4.0)
+
+
+def test_curves_that_do_not_cross_give_no_crossing():
+    rng = np.random.default_rng(1)
+    a, b, _ = _crossing_curves(rng, seeds=4, noise=0.005)
+    apart = {x: v + 1.0 for x, v in b.items()}  # b lifted far above a everywhere
+    found = stats.bootstrap_crossing(a, apart, draws=100)
+    assert np.isnan(found.estimate) and np.isnan(found.low) and found.share_crossing == 0.0

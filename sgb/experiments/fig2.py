@@ -45,7 +45,7 @@ from sgb.provenance import (
     results_file,
     write_results,
 )
-from sgb.stats import sem
+from sgb.stats import crossings, sem
 from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate
 
 _RATIO_KEYS = {"ours": "compression", "authors": "compression_authors"}
@@ -172,19 +172,11 @@ def summarise_compression(
 
 
 def crossovers(summary: dict[str, dict[str, list]], a: str = "sgb", b: str = "dgb") -> list[float]:
-    """Compression ratios where mean accuracy of ``a`` minus ``b`` changes sign, by linear
-    interpolation of both curves in log(compression) on the union of their ratios
-    (within the range both cover)."""
-    xa, ya = np.log(summary[a]["compression"]), np.asarray(summary[a]["mean"])
-    xb, yb = np.log(summary[b]["compression"]), np.asarray(summary[b]["mean"])
-    grid = np.unique(np.concatenate([xa, xb]))
-    grid = grid[(grid >= max(xa.min(), xb.min())) & (grid <= min(xa.max(), xb.max()))]
-    diff = np.interp(grid, xa, ya) - np.interp(grid, xb, yb)
-    points = []
-    for i in np.nonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)[0]:
-        t = diff[i] / (diff[i] - diff[i + 1])
-        points.append(float(np.exp(grid[i] + t * (grid[i + 1] - grid[i]))))
-    return points
+    """Compression ratios where mean accuracy of ``a`` minus ``b`` changes sign
+    (``sgb.stats.crossings``: both curves interpolated in log(compression))."""
+    return crossings(
+        summary[a]["compression"], summary[a]["mean"], summary[b]["compression"], summary[b]["mean"]
+    )
 
 
 def sweep_summary(records: list[dict]) -> dict[str, Any]:
