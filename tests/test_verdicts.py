@@ -225,3 +225,18 @@ def test_curves_that_do_not_cross_give_no_crossing():
     apart = {x: v + 1.0 for x, v in b.items()}  # b lifted far above a everywhere
     found = stats.bootstrap_crossing(a, apart, draws=100)
     assert np.isnan(found.estimate) and np.isnan(found.low) and found.share_crossing == 0.0
+
+
+def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
+    rng = np.random.default_rng(2)
+    records = [
+        {"model": model, "setting": s, "seed": seed, "compression": ratio, "accuracy": acc}
+        for s, ratio in enumerate((10.0, 100.0, 700.0))
+        for model, shift in (("sgb", 0.05 if ratio > 50 else -0.05), ("dgb", 0.0))
+        for seed, acc in enumerate(0.8 + shift + 0.002 * rng.standard_normal(4))
+    ]
+    table = claims.figure2_ratio_tests({"records": records})
+    assert list(table.index) == [10, 100, 700]
+    expected = np.array([-5.0, 5.0, 5.0])
+    assert np.all(table["95 % CI low"] < expected) and np.all(expected < table["95 % CI high"])
+    assert np.all(table["p"] < 1e-3) and set(table["seeds (SGB, DGB)"]) == {"4, 4"}
