@@ -133,8 +133,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--workers",
         type=int,
         default=None,
-        help="workers sharing the runs of a sweep that shares them (fig3, regime, dgb_full) "
-        "on Ray (default: one per core on a local cluster where Ray is installed, at the "
+        help="workers sharing the runs of a sweep that shares them "
+        f"({', '.join(n for n, e in EXPERIMENTS.items() if e.shares_runs)}) on Ray "
+        "(default: one per core on a local cluster where Ray is installed, at the "
         "cpu and paper profiles; else 1, in this process)",
     )
     reproduce.add_argument(

@@ -109,6 +109,20 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
     ),
+    "sgb_full": Experiment(
+        "sgb_full",
+        figure="Fig. 2's SGB as the paper and the authors train it (50 epochs, 3 weight "
+        "draws, rho from -7), also with the KL per type pair and with rho from -5, at all "
+        "7 ratios x 3 seeds (chapter 4)",
+        inputs="fashion-mnist (cpu and paper), digits (smoke)",
+        costs={
+            "smoke": "3 cells of one epoch, not measured",
+            "cpu": "63 cells, each about 10-15 minutes of one core (one epoch took 19-20 s "
+            "on a core shared with other runs); resumable, and several processes share it",
+            "paper": "105 cells (5 seeds), not measured",
+        },
+        shares_runs=True,
+    ),
     "fig3": Experiment(
         "rl",
         "run_fig3",

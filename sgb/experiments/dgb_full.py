@@ -10,7 +10,8 @@ conventions and the authors' nominal ratio for its width
 (``sgb.compression.authors_nominal_width``'s inverse: p / (60 h + 20)).
 
 Cells run seed by seed, each under a lock (``sgb.runlock``), so several processes can
-share the sweep; the results file is written after every chunk of every cell.
+share the sweep; the results file is written after every chunk of every cell, under its
+own lock.
 """
 
 import dataclasses
@@ -120,11 +121,13 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
                 disable=not progress,
             ):
                 record["records"].append(chunk)
-                results = earlier_results(path, sweep) or results
-                results["cells"][name] = record
-                _write(path, results, sweep, profile)
+                with runlock.exclusive(path):
+                    results = earlier_results(path, sweep) or results
+                    results["cells"][name] = record
+                    _write(path, results, sweep, profile)
             state_file.unlink(missing_ok=True)
-    return _write(path, earlier_results(path, sweep) or {"cells": {}}, sweep, profile)
+    with runlock.exclusive(path):
+        return _write(path, earlier_results(path, sweep) or {"cells": {}}, sweep, profile)
 
 
 def _write(path: Path, results: dict, sweep: FullBudgetSweep, profile: str) -> Path:

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from tqdm.auto import tqdm
 
-from sgb import validation
+from sgb import moments, validation
 from sgb.classifiers import dense_sizes
 from sgb.compression import CONVENTIONS, MODEL_KINDS, compression, setting_for_ratio
 from sgb.data import Dataset, load
@@ -133,6 +133,8 @@ def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: Compressio
             "population_average": out["accuracy"]["population_average"],
             "final_kl": out["history"][-1]["kl"],
         }
+        if not sweep.conv_features:  # where the spreads ended, per layer (per synapse)
+            record["layers"] = moments.layer_statistics(out["params"], sizes[0])
     else:
         record["accuracy"] = out["accuracy"]
     if kind == "dgb":
@@ -233,7 +235,7 @@ def _ablation(sweep: CompressionSweep) -> CompressionSweep:
 # MNIST-like data, the authors' shape 784-800-10 and KL (per synapse, weighted 1/n_train).
 # The SGB trains with the local reparameterisation (same ELBO, lower-variance gradients);
 # its individuals are evaluated as whole weight draws.
-_IMAGE_RATIOS = (10.0, 20.0, 50.0, 100.0, 200.0, 400.0, 700.0)
+IMAGE_RATIOS = (10.0, 20.0, 50.0, 100.0, 200.0, 400.0, 700.0)
 _SGB_IMAGES = dataclasses.replace(
     _SGB_TABLE, kl_counting="synapse", num_samples=1, local_reparam=True, batch_size=64
 )
@@ -241,7 +243,7 @@ _SGB_IMAGES = dataclasses.replace(
 
 def _image_sweep(seeds: tuple[int, ...], epochs: int, dgb: DGBConfig) -> CompressionSweep:
     return CompressionSweep(
-        ratios=_IMAGE_RATIOS,
+        ratios=IMAGE_RATIOS,
         seeds=seeds,
         hidden=(800,),
         in_types=30,
