@@ -175,3 +175,32 @@ def test_a_smoke_run_resumes_without_evaluating_again(tmp_path, monkeypatch, cap
     assert calls == [False]
     again = read_results(path)["results"]["genomes"]["ant_k64_s1"]["parts"]["long_legs"]
     assert again["returns"] == lost["returns"]  # the same individuals and initial states
+
+
+def test_the_authors_one_sample_t_leaves_out_the_mean_networks_error_and_welch_counts_it():
+    rng = np.random.default_rng(3)
+    individuals = 1000 + 30 + 50 * rng.standard_normal((100, 64))  # 30 above the network
+    mean_network = 1000 + 400 * rng.standard_normal(200)  # few, noisy episodes
+    out = populations.authors_comparison(individuals, mean_network)
+    one, welch = out["one_sample"], out["welch"]
+    assert one["estimate"] == pytest.approx(welch["estimate"])  # the same difference
+    assert out["mean_network_se"] == pytest.approx(400 / math.sqrt(200), rel=0.15)
+    # Welch's interval holds the mean network's error: wider, and its t smaller
+    width = welch["high"] - welch["low"]
+    assert width > 3 * (one["high"] - one["low"]) and abs(welch["t"]) < abs(one["t"]) / 3
+    assert welch["low"] < 30 < welch["high"]
+    se = math.hypot(out["individuals_se"], out["mean_network_se"])
+    assert welch["t"] == pytest.approx(welch["estimate"] / se)
+
+
+def test_a_regime_genome_is_read_from_the_regime_checkpoints_and_adds_the_authors_parts():
+    config = populations.REGIME_PROFILES["cpu"]
+    (genome,) = config.genomes
+    assert populations.checkpoint_path(genome, config) == (
+        "rl/checkpoints/ant_regime_k64_s0_cpu.msgpack"
+    )
+    assert populations.genome_label(genome) == "ant_regime_k64_s0"
+    assert config.parts == (*populations.PARTS, *populations.AUTHORS_PARTS)
+    assert (config.n_individuals, config.episodes) == (100, 64)
+    with pytest.raises(ValueError, match="authors' settings"):
+        populations.Genome("ours", 0, regime=True)

@@ -200,6 +200,22 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "not measured; needs fig3's paper checkpoints and a GPU",
         },
     ),
+    "regime_populations": Experiment(
+        "populations",
+        "run_regime",
+        "REGIME_PROFILES",
+        figure="Fig. 4E and 5 on the 64-type genome of the authors' regime at 5e7 steps: "
+        "100 individuals x 64 episodes, our protocol (deterministic actions, the mean "
+        "network on the same states) and theirs (sampled actions, their one-sample t "
+        "beside Welch's)",
+        inputs="the Ant; the regime's checkpoint (at smoke, of `reproduce regime "
+        "--profile smoke` in the same results directory)",
+        costs={
+            "smoke": "5 parts of 4 x 3 episodes, not measured",
+            "cpu": "32M env-steps, about half an hour of one CPU core (not yet run); resumable",
+            "paper": "the cpu design on the paper's checkpoint; not measured",
+        },
+    ),
     "spread": Experiment(
         "rl_spread",
         figure="beyond Fig. 5: individuals against the mean network across initial spreads",

@@ -58,7 +58,7 @@ import numpy as np
 from scipy import stats as scipy_stats
 
 from sgb import validation, verdicts
-from sgb.experiments import PROFILE_NAMES, check_profile
+from sgb.experiments import PROFILE_NAMES, check_profile, regime
 from sgb.experiments.rl import checkpoint_name, checkpoint_root, load_agent
 from sgb.provenance import earlier_results, git_commit, provenance, results_file, write_results
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
@@ -67,21 +67,35 @@ from sgb.rl.regimes import SETTINGS
 
 BODIES = ("normal", "long_legs")
 PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body
+# the authors' Figure 5 protocol, on the normal body with sampled actions: other
+# individuals, and the mean network on episodes of its own
+AUTHORS_PARTS = ("sampled", "mean_network_sampled")
 TARGET_RELIABILITY = 0.8
 DECIMALS = 3  # returns are kept to 0.001
 
 
 @dataclass(frozen=True)
 class Genome:
-    """One trained genome of Figure 3: its settings, cell types and training seed."""
+    """One trained genome: its settings, cell types and training seed; of Figure 3, or
+    (``regime=True``) of a run under the authors' training regime at the paper's budget
+    (``sgb.experiments.regime``, the authors' genome settings)."""
 
     settings: str
     seed: int
     cell_types: int = 64
+    regime: bool = False
 
     def __post_init__(self) -> None:
         validation.choice("settings", self.settings, SETTINGS)
         validation.integer("seed", self.seed, minimum=0)
+        if self.regime and self.settings != "authors":
+            raise ValueError("a regime genome has the authors' settings")
+
+    def checkpoint(self, profile: str, env: str = "ant") -> str:
+        """The file name of its checkpoint, trained at ``profile``."""
+        if self.regime:
+            return regime.checkpoint_name(self.cell_types, self.seed, profile)
+        return checkpoint_name(env, self.cell_types, self.seed, profile, self.settings)
 
 
 @dataclass(frozen=True)
@@ -96,6 +110,7 @@ class PopulationsConfig:
     episode_length: int = 1000
     seed: int = 0
     source: str = "cpu"
+    authors_protocol: bool = False  # also evaluate AUTHORS_PARTS
 
     def __post_init__(self) -> None:
         validation.instance("genomes", self.genomes, tuple)
@@ -105,17 +120,20 @@ class PopulationsConfig:
         validation.integer("seed", self.seed, minimum=0)
         validation.choice("source", self.source, PROFILE_NAMES)
 
+    @property
+    def parts(self) -> tuple[str, ...]:
+        return PARTS + AUTHORS_PARTS if self.authors_protocol else PARTS
+
 
 def genome_label(genome: Genome, env: str = "ant") -> str:
-    """The genome's name in the results and the progress: e.g. ``ant_k64_authors_s1``."""
-    name = checkpoint_name(env, genome.cell_types, genome.seed, "cpu", genome.settings)
-    return name.removesuffix("_cpu.msgpack")
+    """The genome's name in the results and the progress: e.g. ``ant_k64_authors_s1``,
+    ``ant_regime_k64_s0``."""
+    return genome.checkpoint("cpu", env).removesuffix("_cpu.msgpack")
 
 
 def checkpoint_path(genome: Genome, config: PopulationsConfig, env: str = "ant") -> str:
     """The genome's checkpoint, relative to a results directory."""
-    name = checkpoint_name(env, genome.cell_types, genome.seed, config.source, genome.settings)
-    return f"rl/checkpoints/{name}"
+    return f"rl/checkpoints/{genome.checkpoint(config.source, env)}"
 
 
 def populations_config(profile: str) -> PopulationsConfig:
@@ -135,6 +153,22 @@ def populations_config(profile: str) -> PopulationsConfig:
 
 
 PROFILES = {p: populations_config(p) for p in PROFILE_NAMES}
+
+
+def regime_populations_config(profile: str) -> PopulationsConfig:
+    """Figures 4E and 5 on the 64-type genome trained under the authors' regime at the
+    paper's budget (seed 0), under our protocol and theirs: 100 individuals x 64 episodes
+    of 1000 steps at ``cpu`` and ``paper``; at ``smoke`` the regime's 16-type smoke genome
+    (``reproduce regime --profile smoke`` makes it), 4 individuals x 3 episodes of 50."""
+    check_profile(profile)
+    if profile == "smoke":
+        genomes = (Genome("authors", 0, 16, regime=True),)  # the smoke profile trains 16 types
+        return PopulationsConfig(genomes, 4, 3, 50, source="smoke", authors_protocol=True)
+    genomes = (Genome("authors", 0, 64, regime=True),)
+    return PopulationsConfig(genomes, 100, 64, 1000, source=profile, authors_protocol=True)
+
+
+REGIME_PROFILES = {p: regime_populations_config(p) for p in PROFILE_NAMES}
 
 
 # Per genome -----------------------------------------------------------------------------
@@ -223,14 +257,43 @@ def mean_network_difference(individuals: np.ndarray, mean_network: np.ndarray) -
     }
 
 
-def genome_summary(returns: dict) -> dict:
-    """Everything above for one genome's returns ``{part: (N, E)}``."""
-    arrays = {part: np.asarray(returns[part], dtype=np.float64) for part in PARTS}
+def authors_comparison(individuals: np.ndarray, mean_network: np.ndarray) -> dict:
+    """Figure 5 under the authors' protocol (sampled actions): the individuals' mean
+    returns (N, from (N, E)) against the mean network's episodes (any shape, M in all).
+    Their test, a one-sample t against the mean network's mean taken as exact, beside
+    Welch's t, which counts the mean network's own standard error; the t of each."""
+    means = np.asarray(individuals, dtype=np.float64).mean(1)
+    episodes = np.ravel(np.asarray(mean_network, dtype=np.float64))
+    base = float(episodes.mean())
+    one = verdicts.one_sample(means - base, 0.0)  # the difference, the base taken as exact
+    welch = verdicts.welch(means, episodes)
+    se_ind = float(means.std(ddof=1) / math.sqrt(means.size))
+    se_net = float(episodes.std(ddof=1) / math.sqrt(episodes.size))
+    difference = float(means.mean()) - base
     return {
+        "individual_episodes": int(np.shape(individuals)[1]),
+        "mean_network_episodes": int(episodes.size),
+        "individuals_mean": float(means.mean()),
+        "individuals_se": se_ind,
+        "mean_network_mean": base,
+        "mean_network_se": se_net,
+        "one_sample": {**one._asdict(), "t": difference / se_ind},
+        "welch": {**welch._asdict(), "t": difference / math.hypot(se_ind, se_net)},
+    }
+
+
+def genome_summary(returns: dict) -> dict:
+    """Everything above for one genome's returns ``{part: (N, E)}`` (the authors' Figure 5
+    protocol too where ``returns`` holds its parts)."""
+    arrays = {part: np.asarray(v, dtype=np.float64) for part, v in returns.items()}
+    out = {
         **{body: body_summary(arrays[body]) for body in BODIES},
         "legs": legs_correlation(arrays["normal"], arrays["long_legs"]),
         "mean_network": mean_network_difference(arrays["normal"], arrays["mean_network"]),
     }
+    if set(AUTHORS_PARTS) <= set(arrays):
+        out["authors_protocol"] = authors_comparison(*(arrays[p] for p in AUTHORS_PARTS))
+    return out
 
 
 # Pooled over the genomes of one setting --------------------------------------------------
@@ -342,11 +405,18 @@ def _clock(seconds: float) -> str:
     return f"{seconds / 60:.0f} min" if seconds >= 90 else f"{seconds:.0f} s"
 
 
+SAMPLED_SEED_OFFSET = 1000  # the authors' protocol draws its individuals and states apart
+
+
 def evaluate_part(agent: tuple, part: str, config: PopulationsConfig, seed: int) -> np.ndarray:
     """Returns (N, E) of one part: the individuals on a body, or the mean network on the
-    normal body; ``agent``: (PPO settings, actor parameters, normalizer)."""
+    normal body (on the individuals' initial states, row by row); ``sampled`` and
+    ``mean_network_sampled``, the same with sampled actions, from evaluation seed
+    ``seed + SAMPLED_SEED_OFFSET`` (other individuals, other states). ``agent``: (PPO
+    settings, actor parameters, normalizer)."""
     ppo, actor, normalizer = agent
-    body = "normal" if part == "mean_network" else part
+    sampled = part in AUTHORS_PARTS
+    body = part if part in BODIES else "normal"
     returns = population_returns(
         replace(ppo.env, variant=body),
         ppo.network,
@@ -355,8 +425,9 @@ def evaluate_part(agent: tuple, part: str, config: PopulationsConfig, seed: int)
         config.n_individuals,
         config.episodes,
         config.episode_length,
-        seed=seed,
-        mean_network=part == "mean_network",
+        seed=seed + SAMPLED_SEED_OFFSET * sampled,
+        mean_network=part.startswith("mean_network"),
+        stochastic=sampled,
     )
     return np.round(np.asarray(returns, dtype=np.float64), DECIMALS)
 
@@ -365,9 +436,9 @@ def summarise(results: dict, config: PopulationsConfig) -> dict:
     """``results`` with every finished genome's summary, the pooled summaries of every
     setting, and whether the design is complete."""
     genomes = results["genomes"]
-    done = [g for g in genomes.values() if set(PARTS) <= set(g["parts"])]
+    done = [g for g in genomes.values() if set(config.parts) <= set(g["parts"])]
     for record in done:
-        record["summary"] = genome_summary({p: record["parts"][p]["returns"] for p in PARTS})
+        record["summary"] = genome_summary({p: record["parts"][p]["returns"] for p in config.parts})
     results["pooled"] = {
         settings: pool_setting([g["summary"] for g in done if g["settings"] == settings])
         for settings in SETTINGS
@@ -382,10 +453,23 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
     ``rl/populations_<env>_<profile>.json`` after each; returns its path."""
     if env != "ant":
         raise ValueError(f"env must be 'ant' for populations (the Ant's bodies), got {env!r}")
-    config = populations_config(profile)
-    path = results_file(Path(out_dir) / "rl", f"populations_{env}", profile)
+    return evaluate(PROFILES[check_profile(profile)], "populations", profile, out_dir)
+
+
+def run_regime(profile: str, out_dir: Path) -> Path:
+    """``run`` for the genome of the authors' regime (``REGIME_PROFILES``), writing
+    ``rl/regime_populations_ant_<profile>.json``."""
+    config = REGIME_PROFILES[check_profile(profile)]
+    return evaluate(config, "regime_populations", profile, out_dir)
+
+
+def evaluate(config: PopulationsConfig, name: str, profile: str, out_dir: Path) -> Path:
+    """Evaluate every part of ``config`` that ``rl/<name>_ant_<profile>.json`` does not
+    hold yet, writing the file after each part; returns its path."""
+    env = "ant"
+    path = results_file(Path(out_dir) / "rl", f"{name}_{env}", profile)
     results = earlier_results(path, config) or {"env": env, "genomes": {}}
-    plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in PARTS]
+    plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in config.parts]
     steps = config.n_individuals * config.episodes * config.episode_length
     todo = [item for item in plan if not _has(results, item[1], item[2], env)]
     start = time.perf_counter()
@@ -394,7 +478,7 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
         label = genome_label(genome, env)
         eta = eta_s(time.perf_counter() - start, k * steps, (len(todo) - k) * steps)
         count = plan.index((j, genome, part)) + 1
-        print(f"populations {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
+        print(f"{name} {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
         checkpoint = checkpoint_path(genome, config, env)
         if label not in agents:
             agents = {label: load_agent(checkpoint_root(out_dir, checkpoint) / checkpoint)}
@@ -410,7 +494,7 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
         }
         _write(path, summarise(results, config), config, profile)
     if not todo:
-        print(f"populations: every part is in {path}; nothing evaluated", flush=True)
+        print(f"{name}: every part is in {path}; nothing evaluated", flush=True)
     return _write(path, summarise(results, config), config, profile)
 
 
