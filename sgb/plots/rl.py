@@ -6,6 +6,7 @@ import numpy as np
 
 from sgb import stats
 from sgb.plots import PALETTE, subplots
+from sgb.rl.regimes import FIG3_SCALE
 
 SETTINGS_STYLE = {
     "ours": ("sgb", "o", "SGB, our settings"),
@@ -49,6 +50,36 @@ def plot_sweep(summary: list[dict], env: str, ax=None):
     ax.set_ylabel("return / vanilla return")
     ax.set_title(env)
     ax.legend(loc="best", fontsize=8)
+    return ax
+
+
+def plot_regime(runs: list[dict], env: str = "ant", ax=None):
+    """Learning curves under the authors' regime: the training-time evaluation (their
+    window return) against env steps, one line per run; the right axis is the authors'
+    Figure 3 scale, (R + 724) / (SOTA + 724)."""
+    if ax is None:
+        _, ax = subplots()
+    for run in sorted(runs, key=lambda r: (r["cell_types"] is not None, r["cell_types"] or 0)):
+        vanilla = run["cell_types"] is None
+        color = PALETTE["baseline"] if vanilla else PALETTE["authors"]
+        name = "vanilla PPO" if vanilla else f"SGB, {run['cell_types']} types"
+        ax.plot(
+            np.asarray(run["eval_steps"]) / 1e6,
+            run["eval_returns"],
+            marker="o",
+            color=color,
+            ls="--" if vanilla else "-",
+            alpha=1.0 if run["seed"] == 0 else 0.5,
+            label=f"{name}, seed {run['seed']}",
+        )
+    ax.set_xlabel("env steps (millions)")
+    ax.set_ylabel("window return (their evaluation)")
+    low, high = FIG3_SCALE[env]
+    right = ax.secondary_yaxis(
+        "right", functions=(lambda r: (r - low) / (high - low), lambda f: low + f * (high - low))
+    )
+    right.set_ylabel("the authors' Figure 3 scale")
+    ax.legend(fontsize=8)
     return ax
 
 
