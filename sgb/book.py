@@ -1,7 +1,8 @@
 """What the chapters share: values glued into their prose, and the package's own code.
 
 ``glue(name, text)`` stores ``text`` (markdown) under ``name`` for the chapters'
-``{glue:md}`name``` roles, so that no number or verdict in the prose is typed by hand.
+``{glue:md}`name``` roles, so that no number or verdict in the prose is typed by hand;
+``glue_all(texts)`` glues a mapping of them (``sgb.prose`` computes them from results).
 Where the book's builder (myst-nb) is not installed, as on Colab, it does nothing: only
 the built book reads glued values. ``show_source(obj)`` displays the source of a package
 function or class as the book is built, so that the code a chapter explains is the code
@@ -9,10 +10,8 @@ that runs and cannot drift from it.
 """
 
 import inspect
-import math
 import textwrap
-
-from sgb.claims import Row
+from collections.abc import Mapping
 
 
 def source(obj: object) -> str:
@@ -42,12 +41,8 @@ def glue(name: str, text: str) -> None:
     myst_glue(name, Markdown(text), display=False)
 
 
-def glue_row(name: str, row: Row) -> None:
-    """Glue a scorecard row's verdict, estimate with interval, detectable effect and the
-    budget that would decide, as ``{name}_verdict``, ``{name}_ours``,
-    ``{name}_detectable`` and ``{name}_decide``."""
-    glue(f"{name}_verdict", f"**{row.verdict}**")
-    glue(f"{name}_ours", row.ours)
-    detectable = math.nan if row.test is None else row.test.detectable
-    glue(f"{name}_detectable", "-" if math.isnan(detectable) else f"{detectable:.3g}")
-    glue(f"{name}_decide", row.decide or "nothing more")
+def glue_all(texts: Mapping[str, str]) -> None:
+    """``glue`` each text of ``texts`` (glue name -> markdown), e.g. an ``sgb.prose``
+    mapping."""
+    for name, text in texts.items():
+        glue(name, text)

@@ -31,7 +31,7 @@ def _close_figures():
 def test_expansion_draws_the_table_and_its_expand_table():
     shape = (10, 7)  # uneven: the first types get one neuron more
     _, axes = subplots(1, 2)
-    left, right = wiring.expansion(axes, MU, shape)
+    left, right = wiring.expansion(MU, shape, axes=axes)
     np.testing.assert_array_equal(left.images[0].get_array(), MU)
     np.testing.assert_array_equal(right.images[0].get_array(), expand_table(MU, shape))
     assert right.images[0].get_array()[3, 4] == MU[0, 1]  # neuron 3 is of type 0 (4, 3, 3)
@@ -52,14 +52,14 @@ def test_expansion_draws_the_table_and_its_expand_table():
 def test_individuals_draws_each_sampled_matrix_in_one_scale():
     kernels = sample((9, 6), 3)
     _, axes = subplots(1, 3)
-    wiring.individuals(axes, kernels, MU.shape)
+    wiring.individuals(kernels, MU.shape, axes=axes)
     limit = np.abs(kernels).max()
     for ax, kernel in zip(axes, kernels, strict=True):
         np.testing.assert_array_equal(ax.images[0].get_array(), kernel)
         assert ax.images[0].norm.vmax == pytest.approx(limit)
     assert [ax.get_title() for ax in axes] == ["individual 1", "individual 2", "individual 3"]
     with pytest.raises(ValueError, match="3 individuals"):
-        wiring.individuals(axes[:2], kernels, MU.shape)
+        wiring.individuals(kernels, MU.shape, axes=axes[:2])
 
 
 def test_sampled_individuals_have_the_genomes_moments():
@@ -82,7 +82,7 @@ def test_pair_moments_reads_each_block():
 def test_model_schematic_draws_the_genome_and_every_synapse_of_every_individual():
     kernels = sample((6, 4), 3)
     _, ax = subplots(figsize=(11, 3.6))
-    wiring.model_schematic(ax, MU, SIGMA, kernels)
+    assert wiring.model_schematic(MU, SIGMA, kernels, ax=ax) is ax
     limit = max(np.abs(MU).max(), np.abs(kernels).max())
     norm = matplotlib.colors.Normalize(-limit, limit)
     # the table squares: mu's six in the weight colours, then sigma's six, darker = wider

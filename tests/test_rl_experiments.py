@@ -9,6 +9,7 @@ from reach import EPISODE, SHARED_STEP, shared_step_config
 
 from sgb.experiments import get_experiment, rl, rl_spread
 from sgb.provenance import read_results
+from sgb.rl import protocols
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.regimes import with_settings
 
@@ -63,9 +64,9 @@ def test_correlation_and_paired_test_on_known_populations():
         "low_gravity": {"individuals": rng.normal(size=(60, 3))},
     }
     returns["normal"]["mean_network"] = returns["normal"]["individuals"] - 1.0
-    assert rl.compare(returns, "normal", "long_legs")["r"] > 0.9
-    assert abs(rl.compare(returns, "slippery", "low_gravity")["r"]) < 0.4
-    test = rl.individuals_vs_mean(returns)
+    assert protocols.compare(returns, "normal", "long_legs")["r"] > 0.9
+    assert abs(protocols.compare(returns, "slippery", "low_gravity")["r"]) < 0.4
+    test = protocols.individuals_vs_mean(returns)
     assert test["t"] > 10 and test["dof"] == 59
 
 
@@ -123,7 +124,7 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
 @SHARED_STEP
 def test_spread_run_trains_and_evaluates_wider_genomes(tmp_path, monkeypatch):
     # the sweep on the cheap Reach environment (the Ant's smoke profile runs in CI)
-    population = rl.PopulationConfig(
+    population = protocols.PopulationConfig(
         "", n_individuals=16, episodes=8, episode_length=EPISODE, conditions=("normal",)
     )
     config = rl_spread.SpreadConfig(

@@ -21,7 +21,6 @@ from reach import (
 
 from sgb import genome, stats
 from sgb.divergence import TrainingDiverged
-from sgb.experiments.rl import PopulationConfig, authors_protocol
 from sgb.rl import checkpoints
 from sgb.rl.agent import (
     MLP,
@@ -35,6 +34,7 @@ from sgb.rl.envs import EnvSpec
 from sgb.rl.normalizer import init_normalizer, update
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import init_state, train
+from sgb.rl.protocols import PopulationConfig, authors_protocol
 from sgb.rl.trainer import make_trainer
 
 

@@ -101,7 +101,7 @@ def test_resume_refuses_results_of_another_config(tmp_path, monkeypatch):
 
 
 def test_fashion_mnist_main_setting_counts_the_kl_per_synapse():
-    sweep, ablation = fig2.PROFILES["cpu"]["fashion-mnist"]
+    sweep, ablation = fig2.PROFILES["cpu"]["fashion-mnist"].values()
     assert sweep.sgb.kl_counting == "synapse" and ablation.sgb.kl_counting == "table"
     assert sweep.hidden == (800,) and (sweep.in_types, sweep.out_types) == (30, 10)
     assert len(sweep.ratios) >= 7 and len(sweep.seeds) == 3 and sweep.dgb.rounds >= 100

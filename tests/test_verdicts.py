@@ -1,11 +1,14 @@
 """The verdict rule, its tests, their power, and the claims registry, on data with known effects."""
 
+import json
+
 import numpy as np
 import pytest
 from scipy import stats as scipy_stats
 
 from sgb import claims, stats, verdicts
 from sgb.paths import committed_results
+from sgb.provenance import _jsonable
 from sgb.reliability import episodes_for, projected_reliability, variance_split
 
 
@@ -190,6 +193,36 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
     for who in (" our genome", " the authors' genome"):
         assert rows["fig5.population_beats_mean", who].verdict == verdicts.REPRODUCED
         assert rows["fig4e.r_legs", who].verdict == verdicts.REPRODUCED
+
+
+def test_regime_population_rows_tell_the_two_protocols_apart():
+    """One synthetic genome read back through JSON: its individuals beat the mean network
+    by 5 % on the same states, and under sampled actions by 2 % with a mean network so
+    noisy that only the one-sample t (which takes its mean as exact) calls it."""
+    from sgb.experiments import populations
+
+    rng = np.random.default_rng(11)
+    skill = rng.normal(0, 300, (100, 1))
+    normal = 2000 + skill + rng.normal(0, 300, (100, 64))
+    parts = {
+        "normal": normal,
+        "long_legs": 1500 + skill + rng.normal(0, 300, (100, 64)),
+        "mean_network": normal - 100 + rng.normal(0, 50, (100, 64)),
+        "sampled": 2040 + skill + rng.normal(0, 300, (100, 64)),
+        "mean_network_sampled": rng.normal(2000, 2000, (16, 1)),
+    }
+    genome = {"training_seed": 0, "parts": {k: {"returns": v.tolist()} for k, v in parts.items()}}
+    genome["summary"] = populations.genome_summary(parts)
+    stored = json.loads(json.dumps(_jsonable({"genomes": {"regime": genome}})))
+    rows = claims.regime_population_rows(stored)
+    fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
+    assert [r.verdict for r in fig5[:1]] == [verdicts.REPRODUCED]
+    assert fig5[0].test.estimate == pytest.approx(5.0, abs=0.5)  # % of the mean network
+    one_sample, welch = fig5[1:]
+    assert one_sample.test.p < 0.05 < welch.test.p
+    assert welch.verdict == verdicts.INCONCLUSIVE
+    (legs,) = [r for r in rows if r.key == "fig4e.r_legs"]
+    assert legs.verdict == verdicts.REPRODUCED and legs.test.low > 0.5
 
 
 def _crossing_curves(rng, seeds: int, noise: float) -> tuple[dict, dict, float]:

@@ -1,7 +1,6 @@
 """Chapter 2: a Bayesian MLP on 1-D regression, and SGB classifiers on the digits data."""
 
 import dataclasses
-import time
 from pathlib import Path
 from typing import Any
 
@@ -11,11 +10,10 @@ import numpy as np
 from sgb import genome
 from sgb.compression import compression_ratio, dense_param_count, sgb_param_count
 from sgb.data import digits
-from sgb.experiments import check_profile
 from sgb.individuals import init_params
 from sgb.layers import SGBMLP
 from sgb.priors import GaussianPrior
-from sgb.provenance import provenance, results_file, write_results
+from sgb.recording import start
 from sgb.regression import gaussian_nll, predictive_bands, toy_regression_data
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 from sgb.training import fit_elbo
@@ -143,14 +141,11 @@ def compare_classifiers(config: BBBConfig, progress: bool = True) -> dict[str, A
 
 def run(profile: str, out_dir: Path) -> Path:
     """Run chapter 2's experiments at ``profile``; write ``out_dir/bbb_<profile>.json``."""
-    config = PROFILES[check_profile(profile)]
-    path = results_file(out_dir, "bbb", profile)
-    start = time.perf_counter()
-    regression = fit_regression(config, progress=False)
-    classifiers = compare_classifiers(config, progress=False)
+    recording = start(PROFILES, profile, out_dir, "bbb")
+    regression = fit_regression(recording.config, progress=False)
+    classifiers = compare_classifiers(recording.config, progress=False)
     results = {
         "regression": {k: regression[k] for k in ("grid", "mean", "std")},
         "classifiers": classifiers["rows"],
     }
-    record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(path, results, record)
+    return recording.write(results, seeds=recording.config.seeds)

@@ -28,15 +28,8 @@ from sgb.classifiers import dense_sizes
 from sgb.compression import CONVENTIONS, compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.dgb import DGB, DGBConfig, dgb_for, train_dgb
-from sgb.experiments import check_profile
-from sgb.provenance import (
-    _jsonable,
-    earlier_results,
-    git_commit,
-    provenance,
-    results_file,
-    write_results,
-)
+from sgb.provenance import _jsonable, git_commit
+from sgb.recording import Recording, start
 from sgb.supervised import DenseConfig, at_chance, dense_accuracy, train_and_evaluate
 
 
@@ -175,10 +168,10 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     """Train the DGB of ``profile`` and the uncompressed network for the same budget, and
     write the DGB's learning record and both accuracies with provenance. A finished part
     is read back from the results file, not trained again."""
-    config = PROFILES[check_profile(profile)]
-    path = results_file(out_dir, f"dgb_budget_{config.dataset}", profile)
+    recording = start(PROFILES, profile, out_dir, lambda config: f"dgb_budget_{config.dataset}")
+    config, path = recording.config, recording.path
     state_file = path.with_suffix(".state.npz")
-    results = earlier_results(path, config)
+    results = recording.earlier()
     data = load(config.dataset, seed=0)
     sizes, width = sizes_and_width(config, data)
     chunks = config.dgb.rounds // config.chunk_rounds
@@ -203,17 +196,15 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
             disable=not progress,
         ):
             results["records"].append(record)
-            _write(path, results, config, profile)
+            _write(recording, results)
         state_file.unlink(missing_ok=True)
     if "uncompressed_same_budget" not in results:
         results["uncompressed_same_budget"] = same_budget_dense(config, data)
-        _write(path, results, config, profile)
+        _write(recording, results)
     return path
 
 
-def _write(path: Path, results: dict, config: BudgetConfig, profile: str) -> Path:
+def _write(recording: Recording, results: dict) -> Path:
     dense = results.get("uncompressed_same_budget")
     parts = results["records"] + ([dense] if dense else [])
-    record = provenance(config, profile, [config.dgb.seed], sum(p["wall_time_s"] for p in parts))
-    record["git_commits"] = sorted({part["git_commit"] for part in parts})
-    return write_results(path, results, record)
+    return recording.write(results, [recording.config.dgb.seed], parts=parts)

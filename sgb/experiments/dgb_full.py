@@ -23,9 +23,9 @@ from sgb import runlock, validation
 from sgb.compression import CONVENTIONS, compression, dense_param_count
 from sgb.data import load
 from sgb.dgb import DGBConfig
-from sgb.experiments import PROFILE_NAMES, check_profile
+from sgb.experiments import PROFILE_NAMES
 from sgb.experiments.dgb_budget import BudgetConfig, sizes_and_width, train_with_budget
-from sgb.provenance import earlier_results, provenance, results_file, write_results
+from sgb.recording import Recording, start
 
 
 @dataclasses.dataclass(frozen=True)
@@ -88,14 +88,14 @@ def cell_name(cell: BudgetConfig) -> str:
 
 def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     """Train every cell not finished yet; a finished cell is read back, not trained again."""
-    sweep = PROFILES[check_profile(profile)]
-    path = results_file(out_dir, f"dgb_full_{sweep.dataset}", profile)
+    recording = start(PROFILES, profile, out_dir, lambda sweep: f"dgb_full_{sweep.dataset}")
+    sweep, path = recording.config, recording.path
     data = load(sweep.dataset, seed=0)
     for cell in sweep.cells():
         name = cell_name(cell)
         state_file = path.with_name(f"{path.stem}_{name}.state.npz")
         with runlock.claim(state_file) as mine:
-            results = earlier_results(path, sweep) or {"dataset": sweep.dataset, "cells": {}}
+            results = recording.earlier() or {"dataset": sweep.dataset, "cells": {}}
             chunks = cell.dgb.rounds // cell.chunk_rounds
             if not mine or len(results["cells"].get(name, {}).get("records", [])) == chunks:
                 continue
@@ -122,23 +122,20 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
             ):
                 record["records"].append(chunk)
                 with runlock.exclusive(path):
-                    results = earlier_results(path, sweep) or results
+                    results = recording.earlier() or results
                     results["cells"][name] = record
-                    _write(path, results, sweep, profile)
+                    _write(recording, results)
             state_file.unlink(missing_ok=True)
     with runlock.exclusive(path):
-        return _write(path, earlier_results(path, sweep) or {"cells": {}}, sweep, profile)
+        return _write(recording, recording.earlier() or {"cells": {}})
 
 
-def _write(path: Path, results: dict, sweep: FullBudgetSweep, profile: str) -> Path:
+def _write(recording: Recording, results: dict) -> Path:
     cells = results["cells"].values()
-    chunks = [c for cell in cells for c in cell["records"]]
     results["complete"] = all(
         len(results["cells"].get(cell_name(c), {}).get("records", []))
         == c.dgb.rounds // c.chunk_rounds
-        for c in sweep.cells()
+        for c in recording.config.cells()
     )
     seeds = sorted({cell["seed"] for cell in cells})
-    record = provenance(sweep, profile, seeds, sum(c["wall_time_s"] for c in chunks))
-    record["git_commits"] = sorted({c["git_commit"] for c in chunks})
-    return write_results(path, results, record)
+    return recording.write(results, seeds, parts=[c for cell in cells for c in cell["records"]])

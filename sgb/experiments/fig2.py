@@ -35,16 +35,9 @@ from sgb.classifiers import dense_sizes
 from sgb.compression import CONVENTIONS, MODEL_KINDS, compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.dgb import DGBConfig
-from sgb.experiments import check_profile
 from sgb.priors import GaussianPrior
-from sgb.provenance import (
-    _jsonable,
-    earlier_results,
-    git_commit,
-    provenance,
-    results_file,
-    write_results,
-)
+from sgb.provenance import git_commit
+from sgb.recording import Recording, start
 from sgb.stats import crossings, sem
 from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate
 
@@ -282,29 +275,28 @@ _CIFAR_PAPER = CompressionSweep(
     dense=DenseConfig(batch_size=128, epochs=200),
 )
 
-# profile -> dataset -> (sweep, KL ablation or None)
-PROFILES: dict[str, dict[str, tuple[CompressionSweep, CompressionSweep | None]]] = {
-    "smoke": {name: (_SMOKE, None) for name in ("digits", "mnist1d")},
+
+def _profile(sweep: CompressionSweep, ablation: CompressionSweep | None) -> dict:
+    return {"sweep": sweep, "ablation": ablation}
+
+
+# profile -> dataset -> {"sweep": the sweep, "ablation": its KL ablation or None}
+PROFILES: dict[str, dict[str, dict[str, CompressionSweep | None]]] = {
+    "smoke": {name: _profile(_SMOKE, None) for name in ("digits", "mnist1d")},
     "cpu": {
-        "digits": (_small_data_sweep(10), _ablation(_small_data_sweep(10))),
-        "mnist1d": (_small_data_sweep(6), _ablation(_small_data_sweep(6))),
-        "fashion-mnist": (_IMAGE_CPU, _ablation(_IMAGE_CPU)),
-        "mnist": (_IMAGE_CPU, _ablation(_IMAGE_CPU)),
+        "digits": _profile(_small_data_sweep(10), _ablation(_small_data_sweep(10))),
+        "mnist1d": _profile(_small_data_sweep(6), _ablation(_small_data_sweep(6))),
+        "fashion-mnist": _profile(_IMAGE_CPU, _ablation(_IMAGE_CPU)),
+        "mnist": _profile(_IMAGE_CPU, _ablation(_IMAGE_CPU)),
     },
     "paper": {
-        "digits": (_small_data_sweep(50), _ablation(_small_data_sweep(50))),
-        "mnist1d": (_small_data_sweep(50), _ablation(_small_data_sweep(50))),
-        "fashion-mnist": (_IMAGE_PAPER, _ablation(_IMAGE_PAPER)),
-        "mnist": (_IMAGE_PAPER, _ablation(_IMAGE_PAPER)),
-        "cifar10": (_CIFAR_PAPER, None),
+        "digits": _profile(_small_data_sweep(50), _ablation(_small_data_sweep(50))),
+        "mnist1d": _profile(_small_data_sweep(50), _ablation(_small_data_sweep(50))),
+        "fashion-mnist": _profile(_IMAGE_PAPER, _ablation(_IMAGE_PAPER)),
+        "mnist": _profile(_IMAGE_PAPER, _ablation(_IMAGE_PAPER)),
+        "cifar10": _profile(_CIFAR_PAPER, None),
     },
 }
-
-
-def _finished(path: Path, config: dict) -> dict[str, list[dict]]:
-    """Records already in ``path`` (none if absent); an error if they came from another config."""
-    results = earlier_results(path, config)
-    return {k: list(results.get(k, [])) for k in ("records", "ablation_records")}
 
 
 def run(
@@ -317,16 +309,10 @@ def run(
 ) -> Path:
     """Run the sweep of ``profile`` on ``dataset`` (optionally only some ``models`` and
     ``seeds``), skipping finished cells, and write its results with provenance."""
-    check_profile(profile)
-    if dataset not in PROFILES[profile]:
-        raise ValueError(
-            f"dataset {dataset!r} has no {profile} profile; choose one of "
-            f"{sorted(PROFILES[profile])}"
-        )
-    sweep, ablation = PROFILES[profile][dataset]
-    config = _jsonable({"sweep": sweep, "ablation": ablation})
-    path = results_file(out_dir, f"fig2_{dataset}", profile)
-    done = _finished(path, config)
+    recording = start(PROFILES, profile, out_dir, f"fig2_{dataset}", choice=dataset)
+    sweep, ablation = recording.config["sweep"], recording.config["ablation"]
+    earlier = recording.earlier()
+    done = {k: list(earlier.get(k, [])) for k in ("records", "ablation_records")}
     data = load(dataset, seed=0)
     sizes = dense_sizes(data.x_train.shape[1:], sweep.conv_features, sweep.hidden, data.num_classes)
     groups = {"records": sweep, "ablation_records": ablation}
@@ -342,24 +328,20 @@ def run(
     finished = sum(len(records) for records in done.values())
     if progress and finished:
         print(
-            f"fig2 {dataset}: reusing the {finished} cells already in {path}; "
+            f"fig2 {dataset}: reusing the {finished} cells already in {recording.path}; "
             f"{len(todo)} left to train",
             flush=True,
         )
     for group, (kind, setting, seed) in tqdm(todo, desc=f"{dataset}", disable=not progress):
         done[group].append(run_one(kind, setting, seed, data, groups[group]))
-        _write(path, dataset, sizes, done, config, profile, sweep)
-    if not path.exists():
-        _write(path, dataset, sizes, done, config, profile, sweep)
-    return path
+        _write(recording, dataset, sizes, done)
+    if not recording.path.exists():
+        _write(recording, dataset, sizes, done)
+    return recording.path
 
 
-def _write(path, dataset, sizes, done, config, profile, sweep) -> Path:
+def _write(recording: Recording, dataset: str, sizes: tuple[int, ...], done: dict) -> Path:
     records = done["records"]
     results = {"dataset": dataset, "sizes": list(sizes), **done, **sweep_summary(records)}
-    all_records = records + done["ablation_records"]
-    record = provenance(
-        config, profile, list(sweep.seeds), sum(r["wall_time_s"] for r in all_records)
-    )
-    record["git_commits"] = sorted({r["git_commit"] for r in all_records})
-    return write_results(path, results, record)
+    seeds = recording.config["sweep"].seeds
+    return recording.write(results, seeds, parts=records + done["ablation_records"])

@@ -39,16 +39,11 @@ from sgb import moments, validation
 from sgb.classifiers import dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
-from sgb.experiments import check_profile, fig2
+from sgb.experiments import fig2
 from sgb.experiments.fig2 import CompressionSweep
 from sgb.individuals import init_params
-from sgb.provenance import (
-    earlier_results,
-    git_commit,
-    provenance,
-    results_file,
-    write_results,
-)
+from sgb.provenance import git_commit
+from sgb.recording import Recording, start
 from sgb.stats import sem
 from sgb.supervised import ClassifierConfig, make_model, train_and_evaluate
 
@@ -63,7 +58,7 @@ class MeanGapConfig:
     each for every seed of ``seeds``."""
 
     dataset: str = "fashion-mnist"
-    sweep: CompressionSweep = fig2.PROFILES["cpu"]["fashion-mnist"][0]
+    sweep: CompressionSweep = fig2.PROFILES["cpu"]["fashion-mnist"]["sweep"]
     ratios: tuple[float, ...] = (10.0, 400.0)
     other_rho_init: float = -7.0
     other_rho_ratios: tuple[float, ...] = (10.0,)
@@ -242,43 +237,41 @@ def summarise(records: list[dict]) -> list[dict[str, Any]]:
 PROFILES: dict[str, MeanGapConfig] = {
     "smoke": MeanGapConfig(
         dataset="digits",
-        sweep=fig2.PROFILES["smoke"]["digits"][0],
+        sweep=fig2.PROFILES["smoke"]["digits"]["sweep"],
         ratios=(4.0, 30.0),
         other_rho_ratios=(4.0,),
         seeds=(0,),
     ),
     "cpu": MeanGapConfig(),
-    "paper": MeanGapConfig(sweep=fig2.PROFILES["paper"]["fashion-mnist"][0], seeds=(0, 1, 2, 3, 4)),
+    "paper": MeanGapConfig(
+        sweep=fig2.PROFILES["paper"]["fashion-mnist"]["sweep"], seeds=(0, 1, 2, 3, 4)
+    ),
 }
 
 
 def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     """Train and evaluate every cell of ``profile`` not yet in its results file, writing
     the file with provenance after each."""
-    config = PROFILES[check_profile(profile)]
-    path = results_file(out_dir, f"mean_gap_{config.dataset}", profile)
-    records = list(earlier_results(path, config).get("records", []))
+    recording = start(PROFILES, profile, out_dir, lambda config: f"mean_gap_{config.dataset}")
+    config = recording.config
+    records = list(recording.earlier().get("records", []))
     data = load(config.dataset, seed=0)
     sizes = dense_sizes(data.x_train.shape[1:], (), config.sweep.hidden, data.num_classes)
     done = {(r["setting"], r["rho_init"], r["seed"]) for r in records}
     todo = [cell for cell in cells(config, sizes) if cell not in done]
     for setting, rho, seed in tqdm(todo, desc="mean gap", disable=not progress):
         records.append(run_cell(setting, rho, seed, data, config.sweep))
-        _write(path, config, profile, sizes, records)
-    if not path.exists():
-        _write(path, config, profile, sizes, records)
-    return path
+        _write(recording, sizes, records)
+    if not recording.path.exists():
+        _write(recording, sizes, records)
+    return recording.path
 
 
-def _write(
-    path: Path, config: MeanGapConfig, profile: str, sizes: tuple[int, ...], records: list[dict]
-) -> Path:
+def _write(recording: Recording, sizes: tuple[int, ...], records: list[dict]) -> Path:
     results = {
-        "dataset": config.dataset,
+        "dataset": recording.config.dataset,
         "sizes": list(sizes),
         "records": records,
         "summary": summarise(records) if records else [],
     }
-    record = provenance(config, profile, list(config.seeds), sum(r["wall_time_s"] for r in records))
-    record["git_commits"] = sorted({r["git_commit"] for r in records})
-    return write_results(path, results, record)
+    return recording.write(results, recording.config.seeds, parts=records)

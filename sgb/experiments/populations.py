@@ -59,10 +59,12 @@ from scipy import stats as scipy_stats
 
 from sgb import validation, verdicts
 from sgb.experiments import PROFILE_NAMES, check_profile, regime
-from sgb.experiments.rl import checkpoint_name, checkpoint_root, load_agent
-from sgb.provenance import earlier_results, git_commit, provenance, results_file, write_results
+from sgb.experiments.rl import checkpoint_name, checkpoint_root
+from sgb.provenance import git_commit
+from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.rl.population import population_returns
+from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
 
 BODIES = ("normal", "long_legs")
@@ -453,30 +455,31 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
     ``rl/populations_<env>_<profile>.json`` after each; returns its path."""
     if env != "ant":
         raise ValueError(f"env must be 'ant' for populations (the Ant's bodies), got {env!r}")
-    return evaluate(PROFILES[check_profile(profile)], "populations", profile, out_dir)
+    return evaluate(start(PROFILES, profile, Path(out_dir) / "rl", "populations_ant"), out_dir)
 
 
 def run_regime(profile: str, out_dir: Path) -> Path:
     """``run`` for the genome of the authors' regime (``REGIME_PROFILES``), writing
     ``rl/regime_populations_ant_<profile>.json``."""
-    config = REGIME_PROFILES[check_profile(profile)]
-    return evaluate(config, "regime_populations", profile, out_dir)
+    rl_dir = Path(out_dir) / "rl"
+    return evaluate(start(REGIME_PROFILES, profile, rl_dir, "regime_populations_ant"), out_dir)
 
 
-def evaluate(config: PopulationsConfig, name: str, profile: str, out_dir: Path) -> Path:
-    """Evaluate every part of ``config`` that ``rl/<name>_ant_<profile>.json`` does not
-    hold yet, writing the file after each part; returns its path."""
-    env = "ant"
-    path = results_file(Path(out_dir) / "rl", f"{name}_{env}", profile)
-    results = earlier_results(path, config) or {"env": env, "genomes": {}}
+def evaluate(recording: Recording, out_dir: Path) -> Path:
+    """Evaluate every part of ``recording.config`` that its results file does not hold yet
+    (checkpoints under ``out_dir``, else the committed ones), writing the file after each
+    part; returns its path."""
+    env, config, path = "ant", recording.config, recording.path
+    name = path.stem.removesuffix(f"_{env}_{recording.profile}")  # the experiment
+    results = recording.earlier() or {"env": env, "genomes": {}}
     plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in config.parts]
     steps = config.n_individuals * config.episodes * config.episode_length
     todo = [item for item in plan if not _has(results, item[1], item[2], env)]
-    start = time.perf_counter()
+    began = time.perf_counter()
     agents: dict[str, tuple] = {}
     for k, (j, genome, part) in enumerate(todo):
         label = genome_label(genome, env)
-        eta = eta_s(time.perf_counter() - start, k * steps, (len(todo) - k) * steps)
+        eta = eta_s(time.perf_counter() - began, k * steps, (len(todo) - k) * steps)
         count = plan.index((j, genome, part)) + 1
         print(f"{name} {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
         checkpoint = checkpoint_path(genome, config, env)
@@ -492,10 +495,10 @@ def evaluate(config: PopulationsConfig, name: str, profile: str, out_dir: Path) 
             "env_steps_per_s": round(steps / wall, 1),
             "git_commit": git_commit(),
         }
-        _write(path, summarise(results, config), config, profile)
+        _write(recording, summarise(results, config))
     if not todo:
         print(f"{name}: every part is in {path}; nothing evaluated", flush=True)
-    return _write(path, summarise(results, config), config, profile)
+    return _write(recording, summarise(results, config))
 
 
 def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> dict:
@@ -512,9 +515,7 @@ def _has(results: dict, genome: Genome, part: str, env: str) -> bool:
     return part in results["genomes"].get(genome_label(genome, env), {}).get("parts", {})
 
 
-def _write(path: Path, results: dict, config: PopulationsConfig, profile: str) -> Path:
+def _write(recording: Recording, results: dict) -> Path:
     parts = [p for g in results["genomes"].values() for p in g["parts"].values()]
     seeds = sorted(g["evaluation_seed"] for g in results["genomes"].values())
-    record = provenance(config, profile, seeds, sum(p["wall_time_s"] for p in parts))
-    record["git_commits"] = sorted({p["git_commit"] for p in parts})
-    return write_results(path, results, record)
+    return recording.write(results, seeds, parts=parts)

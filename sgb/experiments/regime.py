@@ -27,7 +27,7 @@ from sgb.experiments.rl import (
     seed_sem,
     trained_run,
 )
-from sgb.provenance import provenance, results_file, write_results
+from sgb.recording import Recording, start
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_regime, authors_scale, with_settings
@@ -87,8 +87,8 @@ def checkpoint_name(cell_types: int | None, seed: int, profile: str) -> str:
 def run(profile: str, out_dir: Path) -> Path:
     """Train every run not yet trained (each one resumable), writing the results file
     after each."""
-    config = regime_config(profile)
-    path = results_file(Path(out_dir) / "rl", "regime_ant", profile)
+    recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_ant")
+    config = recording.config
     for i, (k, seed) in enumerate(config.runs):
         label = f"regime ant k={k} seed {seed} ({i + 1}/{len(config.runs)})"
         checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(k, seed, profile)
@@ -97,17 +97,18 @@ def run(profile: str, out_dir: Path) -> Path:
                 print(f"{label}: another process is training it", flush=True)
                 continue
             if trained_run(run_config(config, k), seed, checkpoint, profile, label):
-                write_regime(path, config, profile, Path(out_dir))
-    return write_regime(path, config, profile, Path(out_dir))
+                write_regime(recording, Path(out_dir))
+    return write_regime(recording, Path(out_dir))
 
 
-def write_regime(path: Path, config: RegimeRuns, profile: str, out_dir: Path) -> Path:
-    """Write every finished run of ``config`` under ``out_dir``: its learning curve, its
-    final return on both scales, and per cell-type count the mean over seeds with each
-    seed's fraction of the vanilla run of the same seed."""
+def write_regime(recording: Recording, out_dir: Path) -> Path:
+    """Write every finished run of ``recording.config`` under ``out_dir``: its learning
+    curve, its final return on both scales, and per cell-type count the mean over seeds
+    with each seed's fraction of the vanilla run of the same seed."""
+    config = recording.config
     runs = []
     for k, seed in config.runs:
-        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(k, seed, profile)
+        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(k, seed, recording.profile)
         record = finished_run(checkpoint, run_config(config, k))
         if record is not None:
             scaled = authors_scale("ant", record["final_return"])
@@ -118,9 +119,7 @@ def write_regime(path: Path, config: RegimeRuns, profile: str, out_dir: Path) ->
         "runs": runs,
         "summary": summarise_regime(runs),
     }
-    wall = sum(r["wall_time_s"] for r in runs)
-    seeds = sorted({r["seed"] for r in runs})
-    return write_results(path, results, provenance(config, profile, seeds, wall))
+    return recording.write(results, sorted({r["seed"] for r in runs}), parts=runs)
 
 
 def summarise_regime(runs: list[dict]) -> list[dict]:

@@ -11,8 +11,7 @@
   on the same initial states; paired t-test.
 """
 
-import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -20,13 +19,20 @@ import numpy as np
 from sgb import runlock, stats, validation
 from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.paths import committed_results
-from sgb.provenance import provenance, read_results, results_file, write_results
+from sgb.provenance import provenance, read_results
+from sgb.recording import Recording, start
 from sgb.rl import checkpoints
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.envs import EnvSpec
-from sgb.rl.normalizer import Normalizer
-from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig, train
+from sgb.rl.protocols import (
+    PopulationConfig,
+    authors_protocol,
+    compare,
+    individuals_vs_mean,
+    load_agent,
+    population_on,
+)
 from sgb.rl.regimes import ABLATIONS, SETTINGS, with_settings
 
 CHECKPOINT_DIR = Path("rl") / "checkpoints"
@@ -62,26 +68,6 @@ class CellTypeSweep:
     def seeds(self) -> tuple[int, ...]:
         """Every seed any point runs, ascending."""
         return tuple(sorted({seed for p in self.points for seed in p.seeds}))
-
-
-@dataclass(frozen=True)
-class PopulationConfig:
-    """Figures 4 and 5: which checkpoint, how many individuals, episodes and steps.
-
-    ``sampled_episodes`` and ``mean_network_episodes`` size the authors' Figure 5
-    protocol: each individual plays ``sampled_episodes`` episodes with sampled actions,
-    the mean network ``mean_network_episodes`` episodes.
-    """
-
-    checkpoint: str
-    n_individuals: int = 100
-    episodes: int = 5
-    episode_length: int = 1000
-    seed: int = 0
-    conditions: tuple[str, ...] = field(default=("normal", "long_legs", "slippery", "low_gravity"))
-    mean_network_conditions: tuple[str, ...] = ("normal",)
-    sampled_episodes: int = 10
-    mean_network_episodes: int = 1000
 
 
 def ppo_settings(env: str, profile: str) -> PPOConfig:
@@ -181,8 +167,10 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
     the results file is written again from every finished checkpoint of the sweep
     (``"complete": false`` until all are).
     """
-    config = sweep_config(env, profile)
-    path = results_file(Path(out_dir) / "rl", f"fig3_{env}", profile)
+    if env not in BACKENDS:
+        raise ValueError(f"env must be one of {sorted(BACKENDS)}, got {env!r}")
+    recording = start(FIG3_PROFILES, profile, Path(out_dir) / "rl", f"fig3_{env}", choice=env)
+    config = recording.config
     planned = sweep_runs(config)
     for i, (settings, k, seed) in enumerate(planned):
         label = f"fig3 {env} {settings} k={k} seed {seed} ({i + 1}/{len(planned)})"
@@ -194,8 +182,8 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
                 print(f"{label}: another process is training it", flush=True)
                 continue
             if trained_run(run_config(config, settings, k), seed, checkpoint, profile, label):
-                write_sweep(path, config, profile, Path(out_dir))
-    return write_sweep(path, config, profile, Path(out_dir))
+                write_sweep(recording, Path(out_dir))
+    return write_sweep(recording, Path(out_dir))
 
 
 def run_config(config: CellTypeSweep, settings: str, cell_types: int | None) -> PPOConfig:
@@ -205,14 +193,16 @@ def run_config(config: CellTypeSweep, settings: str, cell_types: int | None) -> 
     )
 
 
-def write_sweep(path: Path, config: CellTypeSweep, profile: str, out_dir: Path) -> Path:
-    """Write the results of every finished run of ``config`` under ``out_dir``; the wall
-    time recorded is the sum of the runs' own training times, whenever each was trained."""
+def write_sweep(recording: Recording, out_dir: Path) -> Path:
+    """Write the results of every finished run of ``recording.config`` under ``out_dir``;
+    the wall time recorded is the sum of the runs' own training times, whenever each was
+    trained."""
+    config = recording.config
     env = config.ppo.env.name
     runs = []
     for settings, k, seed in sweep_runs(config):
-        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile, settings)
-        record = finished_run(checkpoint, run_config(config, settings, k))
+        name = checkpoint_name(env, k, seed, recording.profile, settings)
+        record = finished_run(out_dir / CHECKPOINT_DIR / name, run_config(config, settings, k))
         if record is not None:
             runs.append({"settings": settings, "cell_types": k, "seed": seed, **record})
     results = {
@@ -222,9 +212,7 @@ def write_sweep(path: Path, config: CellTypeSweep, profile: str, out_dir: Path) 
         "summary": summarise_cell_types(runs),
         "summary_last_two": summarise_cell_types(runs, "last_two_return"),
     }
-    wall = sum(r["wall_time_s"] for r in runs)
-    seeds = sorted({r["seed"] for r in runs})
-    return write_results(path, results, provenance(config, profile, seeds, wall))
+    return recording.write(results, sorted({r["seed"] for r in runs}), parts=runs)
 
 
 def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str, label: str) -> bool:
@@ -326,100 +314,10 @@ def population_config(profile: str) -> PopulationConfig:
     return PopulationConfig(checkpoint, episodes=3)
 
 
-def load_agent(checkpoint: Path) -> tuple[PPOConfig, dict, Normalizer]:
-    """The PPO settings, actor parameters and observation normalizer kept in ``checkpoint``."""
-    ppo, params, normalizer, _ = checkpoints.load(checkpoint)
-    return ppo, params.actor, normalizer
-
-
 def evaluate_conditions(config: PopulationConfig, results_dir: Path) -> dict:
     """Returns (N, episodes) of the individuals on every condition, and of the mean network
     (on the same initial states) on ``mean_network_conditions``."""
     return population_on(*load_agent(Path(results_dir) / config.checkpoint), config)
-
-
-def population_on(
-    ppo: PPOConfig, actor_params: dict, normalizer: Normalizer, config: PopulationConfig
-) -> dict:
-    """``evaluate_conditions`` for an agent in memory: ``ppo`` gives its env and network."""
-    out = {}
-    for variant in config.conditions:
-        spec = replace(ppo.env, variant=variant)
-        common = (
-            spec,
-            ppo.network,
-            actor_params,
-            normalizer,
-            config.n_individuals,
-            config.episodes,
-            config.episode_length,
-            config.seed,
-        )
-        out[variant] = {"individuals": population_returns(*common)}
-        if variant in config.mean_network_conditions:
-            out[variant]["mean_network"] = population_returns(*common, mean_network=True)
-    return out
-
-
-def compare(returns: dict, a: str, b: str) -> dict:
-    """Pearson r (with p) of the individuals' mean returns on conditions ``a`` and ``b``."""
-    x = returns[a]["individuals"].mean(axis=1)
-    y = returns[b]["individuals"].mean(axis=1)
-    r = stats.pearson(x, y)
-    return {"conditions": [a, b], "r": r.statistic, "p": r.p_value, "n": len(x)}
-
-
-def individuals_vs_mean(returns: dict, condition: str = "normal") -> dict:
-    """Paired t-test of each individual's mean return against the mean network's on the
-    same initial states, and 99% confidence intervals of both."""
-    ind = returns[condition]["individuals"].mean(axis=1)
-    mean_net = returns[condition]["mean_network"].mean(axis=1)
-    t = stats.paired_t(ind, mean_net)
-    return {
-        "condition": condition,
-        "t": t.statistic,
-        "p": t.p_value,
-        "dof": t.dof,
-        "individuals_ci99": stats.mean_ci(ind, 0.99),
-        "mean_network_ci99": stats.mean_ci(mean_net, 0.99),
-    }
-
-
-def authors_protocol(
-    ppo: PPOConfig, actor_params: dict, normalizer: Normalizer, config: PopulationConfig
-) -> dict:
-    """Figure 5 as the authors' code runs it: each individual plays ``sampled_episodes``
-    episodes and the mean network ``mean_network_episodes``, all with sampled actions and
-    independent initial states; one-sample t-test of the individuals' mean returns
-    against the mean network's mean return, taken as a fixed value."""
-    common = (ppo.env, ppo.network, actor_params, normalizer)
-    individuals = population_returns(
-        *common,
-        config.n_individuals,
-        config.sampled_episodes,
-        config.episode_length,
-        seed=config.seed + 1,
-        stochastic=True,
-    )
-    mean_network = population_returns(
-        *common,
-        config.mean_network_episodes,
-        1,
-        config.episode_length,
-        seed=config.seed + 2,
-        mean_network=True,
-        stochastic=True,
-    )[:, 0]
-    t = stats.one_sample_t(individuals.mean(axis=1), float(mean_network.mean()))
-    return {
-        "individuals": individuals,
-        "mean_network": mean_network,
-        "t": t.statistic,
-        "p": t.p_value,
-        "dof": t.dof,
-        "individuals_ci99": stats.mean_ci(individuals.mean(axis=1), 0.99),
-        "mean_network_ci99": stats.mean_ci(mean_network, 0.99),
-    }
 
 
 def fig4_config(profile: str) -> PopulationConfig:
@@ -442,9 +340,9 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
         raise ValueError(
             f"env must be 'ant' for {figure} (the variants are Ant bodies), got {env!r}"
         )
-    config = fig4_config(profile) if figure == "fig4" else fig5_config(profile)
-    path = results_file(Path(out_dir) / "rl", f"{figure}_{env}", profile)
-    start = time.perf_counter()
+    profiles = FIG4_PROFILES if figure == "fig4" else FIG5_PROFILES
+    recording = start(profiles, profile, Path(out_dir) / "rl", f"{figure}_{env}")
+    config = recording.config
     agent = load_agent(checkpoint_root(out_dir, config.checkpoint) / config.checkpoint)
     returns = population_on(*agent, config)
     results = {"returns": returns}
@@ -454,8 +352,7 @@ def _run_population(profile: str, out_dir: Path, env: str, figure: str) -> Path:
     else:
         results["mean_network"] = individuals_vs_mean(returns)
         results["authors_protocol"] = authors_protocol(*agent, config)
-    record = provenance(config, profile, [config.seed], time.perf_counter() - start)
-    return write_results(path, results, record)
+    return recording.write(results, [config.seed])
 
 
 def checkpoint_root(out_dir: Path, checkpoint: str) -> Path:

@@ -8,7 +8,6 @@ and each trained genome's individuals are compared with its mean network on the 
 initial states, as in Figure 5.
 """
 
-import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -18,19 +17,16 @@ from sgb import genome
 from sgb.experiments import check_profile
 from sgb.experiments.rl import (
     CHECKPOINT_DIR,
-    PopulationConfig,
     checkpoint_name,
-    individuals_vs_mean,
-    load_agent,
     population_config,
-    population_on,
     seed_sem,
     sweep_config,
     trained_run,
 )
-from sgb.provenance import provenance, results_file, write_results
+from sgb.recording import start
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
+from sgb.rl.protocols import PopulationConfig, individuals_vs_mean, load_agent, population_on
 
 
 @dataclass(frozen=True)
@@ -118,13 +114,10 @@ def run(profile: str, out_dir: Path, env: str = "ant") -> Path:
     """
     if env != "ant":
         raise ValueError(f"env must be 'ant' for spread, got {env!r}")
-    config = spread_config(profile)
-    path = results_file(Path(out_dir) / "rl", f"spread_{env}", profile)
-    start = time.perf_counter()
-    runs = spread_runs(config, profile, Path(out_dir))
+    recording = start(PROFILES, profile, Path(out_dir) / "rl", f"spread_{env}")
+    runs = spread_runs(recording.config, profile, Path(out_dir))
     results = {"env": env, "runs": runs, "summary": summarise_spread(runs)}
-    record = provenance(config, profile, list(config.seeds), time.perf_counter() - start)
-    return write_results(path, results, record)
+    return recording.write(results, recording.config.seeds)
 
 
 def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]:

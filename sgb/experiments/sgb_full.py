@@ -31,10 +31,9 @@ from tqdm.auto import tqdm
 from sgb import runlock, validation
 from sgb.classifiers import dense_sizes
 from sgb.data import load
-from sgb.experiments import check_profile
 from sgb.experiments.fig2 import IMAGE_RATIOS, CompressionSweep, run_one, sweep_cells, sweep_summary
 from sgb.priors import GaussianPrior
-from sgb.provenance import earlier_results, provenance, results_file, write_results
+from sgb.recording import Recording, start
 from sgb.supervised import ClassifierConfig
 
 VARIANTS: dict[str, dict] = {
@@ -95,8 +94,8 @@ def cell_name(variant: str, setting: int, seed: int) -> str:
 
 def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     """Train every cell that no other process holds and no run has finished."""
-    full = PROFILES[check_profile(profile)]
-    path = results_file(out_dir, f"sgb_full_{full.dataset}", profile)
+    recording = start(PROFILES, profile, out_dir, lambda full: f"sgb_full_{full.dataset}")
+    full, path = recording.config, recording.path
     data = load(full.dataset, seed=0)
     sweep = full.sweep
     sizes = dense_sizes(data.x_train.shape[1:], sweep.conv_features, sweep.hidden, data.num_classes)
@@ -107,19 +106,19 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
         name = cell_name(variant, setting, seed)
         with runlock.claim(path.with_name(f"{path.stem}_{name}")) as mine:
             with runlock.exclusive(path):
-                done = earlier_results(path, full).get("cells", {})
+                done = recording.earlier().get("cells", {})
             if not mine or name in done:
                 continue
             record = {"variant": variant, **run_one(kind, setting, seed, data, full.of(variant))}
             with runlock.exclusive(path):
-                done = earlier_results(path, full).get("cells", {}) | {name: record}
-                _write(path, full, profile, sizes, done)
+                done = recording.earlier().get("cells", {}) | {name: record}
+                _write(recording, sizes, done)
     with runlock.exclusive(path):
-        return _write(path, full, profile, sizes, earlier_results(path, full).get("cells", {}))
+        return _write(recording, sizes, recording.earlier().get("cells", {}))
 
 
-def _write(path: Path, full: FullSGBSweep, profile: str, sizes, cells: dict) -> Path:
-    records = list(cells.values())
+def _write(recording: Recording, sizes: tuple[int, ...], cells: dict) -> Path:
+    full, records = recording.config, list(cells.values())
     results = {
         "dataset": full.dataset,
         "sizes": list(sizes),
@@ -131,8 +130,4 @@ def _write(path: Path, full: FullSGBSweep, profile: str, sizes, cells: dict) -> 
             if any(r["variant"] == v for r in records)
         },
     }
-    record = provenance(
-        full, profile, list(full.sweep.seeds), sum(r["wall_time_s"] for r in records)
-    )
-    record["git_commits"] = sorted({r["git_commit"] for r in records})
-    return write_results(path, results, record)
+    return recording.write(results, full.sweep.seeds, parts=records)

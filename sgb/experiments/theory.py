@@ -7,7 +7,6 @@ to ``results/theory_cpu.json`` with provenance.
 
 import dataclasses
 import functools
-import time
 from pathlib import Path
 from typing import Any
 
@@ -18,9 +17,8 @@ from tqdm.auto import tqdm
 
 from sgb import theory
 from sgb.data import Dataset, digits
-from sgb.experiments import check_profile
 from sgb.genome import softplus
-from sgb.provenance import provenance, results_file, write_results
+from sgb.recording import start
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 
 
@@ -466,15 +464,10 @@ def compute(config: TheoryConfig, progress: bool = True) -> dict[str, Any]:
 
 def run(profile: str, out_dir: Path, **options: Any) -> Path:
     """Compute chapter 3's numbers at ``profile`` and write ``out_dir/theory_<profile>.json``."""
-    check_profile(profile)
     if options:
         raise ValueError(f"theory takes no options, got {sorted(options)}")
-    config = PROFILES[profile]
-    path = results_file(out_dir, "theory", profile)
-    start = time.time()
-    results = compute(config)
-    record = provenance(config, profile, [config.seed], time.time() - start)
-    return write_results(path, results, record)
+    recording = start(PROFILES, profile, out_dir, "theory")
+    return recording.write(compute(recording.config), seeds=[recording.config.seed])
 
 
 def network_summary(results: dict[str, Any]) -> tuple[list[dict], list[dict]]:

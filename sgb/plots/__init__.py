@@ -1,4 +1,9 @@
-"""Figures of the book: one shared style here, one module of figure functions per chapter."""
+"""Figures of the book: one shared style here, one module of figure functions per chapter.
+
+One convention for every figure function: the data first, then ``ax=None`` (or ``axes``
+for a figure of several panels); it draws on the axes given, else on a new figure of its
+own size (``axes_or_new``), and returns them.
+"""
 
 import matplotlib as mpl
 import matplotlib.pyplot as plt
@@ -52,3 +57,11 @@ def subplots(*args, **kwargs):
     apply_style()
     kwargs.setdefault("layout", "constrained")
     return plt.subplots(*args, **kwargs)
+
+
+def axes_or_new(ax, *args, **kwargs):
+    """``ax`` (one axes or several) if given, else those of a new figure
+    ``subplots(*args, **kwargs)``."""
+    if ax is None:
+        _, ax = subplots(*args, **kwargs)
+    return ax

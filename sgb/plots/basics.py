@@ -5,13 +5,13 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from scipy import stats as scipy_stats
 
-from sgb.plots import PALETTE, subplots
+from sgb.plots import PALETTE, axes_or_new
 from sgb.stats import sem
 
 
-def bits_bars(bits: Mapping[str, float], title: str):
+def bits_bars(bits: Mapping[str, float], title: str, ax=None):
     """Horizontal bars of information amounts (bits) on a log axis."""
-    fig, ax = subplots(figsize=(6.5, 0.6 + 0.5 * len(bits)))
+    ax = axes_or_new(ax, figsize=(6.5, 0.6 + 0.5 * len(bits)))
     names = list(bits)
     ax.barh(names, [bits[n] for n in names], color=PALETTE["sgb"])
     ax.set_xscale("log")
@@ -21,12 +21,12 @@ def bits_bars(bits: Mapping[str, float], title: str):
     ax.invert_yaxis()
     for i, name in enumerate(names):
         ax.text(bits[name], i, f" {bits[name]:.1e}", va="center", fontsize=9)
-    return fig
+    return ax
 
 
-def compression_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]]]):
+def compression_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]]], ax=None):
     """Compression ratio against the number of hidden cell types, one line per network."""
-    fig, ax = subplots()
+    ax = axes_or_new(ax)
     for name, (types, ratios) in curves.items():
         ax.plot(types, ratios, marker="o", label=name)
     ax.axhline(1.0, color=PALETTE["baseline"], lw=1, ls="--", label="no compression")
@@ -35,12 +35,12 @@ def compression_curves(curves: Mapping[str, tuple[Sequence[int], Sequence[float]
     ax.set_xlabel("cell types per hidden layer, k")
     ax.set_ylabel("compression ratio (dense params / SGB params)")
     ax.legend(loc="upper right", fontsize=8)
-    return fig
+    return ax
 
 
-def predictive_bands(fit: Mapping[str, np.ndarray]):
+def predictive_bands(fit: Mapping[str, np.ndarray], ax=None):
     """Training data, the predictive mean and +-1, 2 standard deviations of a Bayesian MLP."""
-    fig, ax = subplots()
+    ax = axes_or_new(ax)
     grid, mean, std = fit["grid"], fit["mean"], fit["std"]
     for k, alpha in ((2, 0.15), (1, 0.3)):
         ax.fill_between(
@@ -58,10 +58,10 @@ def predictive_bands(fit: Mapping[str, np.ndarray]):
     ax.set_xlabel("input x")
     ax.set_ylabel("output y")
     ax.legend(loc="lower left", fontsize=8)
-    return fig
+    return ax
 
 
-def accuracy_comparison(rows: Sequence[Mapping]):
+def accuracy_comparison(rows: Sequence[Mapping], ax=None):
     """Innate test accuracy per classifier: mean network, individuals (mean and 95% interval
     over the sampled individuals and seeds) and the population-averaged prediction."""
     variants = list(dict.fromkeys(r["variant"] for r in rows))
@@ -71,7 +71,7 @@ def accuracy_comparison(rows: Sequence[Mapping]):
         ("population_average", "population-averaged prediction"),
     ]
     colors = [PALETTE["mean_network"], PALETTE["individuals"], PALETTE["sgb"]]
-    fig, ax = subplots(figsize=(7.5, 4))
+    ax = axes_or_new(ax, figsize=(7.5, 4))
     width = 0.26
     for j, ((key, label), color) in enumerate(zip(kinds, colors, strict=True)):
         means, errors = [], []
@@ -89,12 +89,12 @@ def accuracy_comparison(rows: Sequence[Mapping]):
     low = min(min(np.atleast_1d(r[k]).min() for k, _ in kinds) for r in rows)
     ax.set_ylim(max(0.0, low - 0.1), 1.0)
     ax.legend(loc="lower right", fontsize=8)
-    return fig
+    return ax
 
 
-def type_pair_histogram(weights: np.ndarray, mu: float, sigma: float, title: str):
+def type_pair_histogram(weights: np.ndarray, mu: float, sigma: float, title: str, ax=None):
     """Histogram of one type pair's sampled weights against its N(mu, sigma^2) density."""
-    fig, ax = subplots()
+    ax = axes_or_new(ax)
     ax.hist(
         weights,
         bins=30,
@@ -114,4 +114,4 @@ def type_pair_histogram(weights: np.ndarray, mu: float, sigma: float, title: str
     ax.set_ylabel("density")
     ax.set_title(title)
     ax.legend(fontsize=8)
-    return fig
+    return ax

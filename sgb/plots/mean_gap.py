@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from matplotlib.axes import Axes
 
-from sgb.plots import PALETTE
+from sgb.plots import PALETTE, axes_or_new
 
 _SERIES = (
     ("accuracy", "individuals (sampled)", PALETTE["individuals"]),
@@ -20,10 +20,11 @@ def _cell_label(row: Mapping[str, Any]) -> str:
     return f"{row['compression']:.0f}x\n$\\rho$ = {row['rho_init']:g}"
 
 
-def plot_mean_gap(ax: Axes, results: Mapping[str, Any]) -> Axes:
+def plot_mean_gap(results: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """Grouped bars: per cell (compression, rho start) of ``results["summary"]``, the test
     accuracy (%) of the individuals, the mean network and the moment-matched network, mean
     over seeds with SEM error bars (none with one seed). Returns ``ax``."""
+    ax = axes_or_new(ax, figsize=(6.4, 3.8))
     rows = results["summary"]
     x = np.arange(len(rows))
     width = 0.8 / len(_SERIES)

@@ -4,7 +4,7 @@ pooled."""
 
 import numpy as np
 
-from sgb.plots import PALETTE, subplots
+from sgb.plots import PALETTE, axes_or_new
 
 BODY_STYLE = {"normal": ("sgb", "o", "normal legs"), "long_legs": ("dgb", "s", "long legs")}
 SETTINGS_COLOR = {"ours": "sgb", "authors": "authors"}
@@ -18,8 +18,7 @@ def _finished(genomes: dict) -> dict:
 def plot_icc(genomes: dict, ax=None):
     """Per genome (one row each), the one-episode ICC of each body with its 95 % F
     interval; ``genomes``: the results' ``"genomes"`` (label -> record)."""
-    if ax is None:
-        _, ax = subplots()
+    ax = axes_or_new(ax)
     done = _finished(genomes)
     rows = np.arange(len(done))
     offsets = (-0.12, 0.12)
@@ -49,8 +48,7 @@ def plot_differences(results: dict, ax=None):
     """Figure 5 per genome: the individuals' return minus the mean network's, in percent
     of the mean network's, with its paired 95 % interval; below, each setting's pooled
     value (fixed effect, filled) and the interval over its genomes (Student t, open)."""
-    if ax is None:
-        _, ax = subplots()
+    ax = axes_or_new(ax)
     done = _finished(results["genomes"])
     labels = list(done)
     for row, g in enumerate(done.values()):

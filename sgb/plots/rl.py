@@ -5,7 +5,7 @@ rendered frames of the bodies (still, or walking with each tile labelled)."""
 import numpy as np
 
 from sgb import stats
-from sgb.plots import PALETTE, subplots
+from sgb.plots import PALETTE, axes_or_new
 from sgb.rl.regimes import FIG3_SCALE
 
 SETTINGS_STYLE = {
@@ -20,8 +20,7 @@ SETTINGS_STYLE = {
 def plot_sweep(summary: list[dict], env: str, ax=None):
     """Innate return as a fraction of vanilla PPO against the number of cell types (SEM
     bars), one line per genome settings."""
-    if ax is None:
-        _, ax = subplots()
+    ax = axes_or_new(ax)
     types = set()
     for settings, (color, marker, label) in SETTINGS_STYLE.items():
         rows = sorted(
@@ -57,8 +56,7 @@ def plot_regime(runs: list[dict], env: str = "ant", ax=None):
     """Learning curves under the authors' regime: the training-time evaluation (their
     window return) against env steps, one line per run; the right axis is the authors'
     Figure 3 scale, (R + 724) / (SOTA + 724)."""
-    if ax is None:
-        _, ax = subplots()
+    ax = axes_or_new(ax)
     for run in sorted(runs, key=lambda r: (r["cell_types"] is not None, r["cell_types"] or 0)):
         vanilla = run["cell_types"] is None
         color = PALETTE["baseline"] if vanilla else PALETTE["authors"]
@@ -85,8 +83,7 @@ def plot_regime(runs: list[dict], env: str = "ant", ax=None):
 
 def plot_pair(returns: dict, a: str, b: str, ax=None):
     """Each individual's mean return on condition ``a`` vs ``b``, SEM over episodes as bars."""
-    if ax is None:
-        _, ax = subplots()
+    ax = axes_or_new(ax)
     x, y = np.asarray(returns[a]["individuals"]), np.asarray(returns[b]["individuals"])
     ax.errorbar(
         x.mean(1),
@@ -128,7 +125,7 @@ def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
 
 
 def plot_authors_protocol(protocol: dict, ax=None):
-    """Figure 5, the authors' protocol (``sgb.experiments.rl.authors_protocol``): sorted
+    """Figure 5, the authors' protocol (``sgb.rl.protocols.authors_protocol``): sorted
     mean returns of the individuals (sampled actions) against the mean network's episodes,
     with 99% CI bands and the one-sample t-test."""
     ind = np.asarray(protocol["individuals"]).mean(1)
@@ -138,8 +135,7 @@ def plot_authors_protocol(protocol: dict, ax=None):
 
 
 def _population_and_mean_network(ind, mean_net, title: str, ylabel: str, ax):
-    if ax is None:
-        _, ax = subplots()
+    ax = axes_or_new(ax)
     rank = np.arange(1, ind.size + 1)
     ax.plot(rank, np.sort(ind), ".", color=PALETTE["individuals"], label="individuals (sorted)")
     for values, name in ((ind, "individuals"), (mean_net, "mean_network")):
@@ -158,8 +154,7 @@ def plot_spread(summary: list[dict], axes=None):
     """Against the initial sigma (log axis): the individuals' mean return minus the mean
     network's (left) and the standard deviation of the individuals' returns (right);
     bars are the SEM over seeds."""
-    if axes is None:
-        _, axes = subplots(1, 2, figsize=(10, 3.8))
+    axes = axes_or_new(axes, 1, 2, figsize=(10, 3.8))
     sigma = [r["sigma_init"] for r in summary]
     panels = (
         ("advantage", "individuals - mean network (return)", PALETTE["individuals"]),
@@ -179,8 +174,7 @@ def plot_spread(summary: list[dict], axes=None):
 def plot_backends(bench: dict, axes=None):
     """``benchmarks/bench_backends.py``'s results: training env-steps/s per Brax backend
     (left) and the learning curve of vanilla PPO on the fastest one (right)."""
-    if axes is None:
-        _, axes = subplots(1, 2, figsize=(10, 3.8))
+    axes = axes_or_new(axes, 1, 2, figsize=(10, 3.8))
     speeds = bench["throughput"]
     axes[0].bar(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
     axes[0].set_xlabel("Brax backend")
@@ -196,9 +190,8 @@ def plot_backends(bench: dict, axes=None):
 
 def show_images(images: dict[str, np.ndarray], axes=None):
     """Rendered frames (height, width, 3) side by side, titled by their keys."""
-    if axes is None:
-        _, axes = subplots(1, len(images), figsize=(4.0 * len(images), 3.2), squeeze=False)
-        axes = axes[0]
+    n = len(images)
+    axes = np.ravel(axes_or_new(axes, 1, n, figsize=(4.0 * n, 3.2), squeeze=False))
     for ax, (title, image) in zip(axes, images.items(), strict=True):
         ax.imshow(image)
         ax.set_title(title)

@@ -6,10 +6,9 @@ from typing import Any
 import matplotlib.ticker as mticker
 import numpy as np
 from matplotlib.axes import Axes
-from matplotlib.figure import Figure
 
 from sgb.experiments.fig2 import summarise_compression
-from sgb.plots import PALETTE, subplots
+from sgb.plots import PALETTE, axes_or_new
 
 _LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
 _AXES = {
@@ -43,11 +42,15 @@ def _log_x(ax: Axes) -> None:
 
 
 def plot_accuracy_vs_compression(
-    ax: Axes, results: Mapping[str, Any], convention: str = "ours", mean_network: bool = True
-) -> None:
+    results: Mapping[str, Any],
+    convention: str = "ours",
+    mean_network: bool = True,
+    ax: Axes | None = None,
+) -> Axes:
     """One panel: SGB and DGB mean innate test accuracy (%) +- SEM over seeds against
     compression under ``convention`` (log axis), the SGB's mean network, the uncompressed
     network (dotted) and the SGB/DGB crossovers (thin vertical lines)."""
+    ax = axes_or_new(ax, figsize=(5.2, 4.0))
     part = results[convention]
     summary = part["summary"]
     for kind in ("dgb", "sgb"):
@@ -65,31 +68,34 @@ def plot_accuracy_vs_compression(
     ax.set_xlabel(_AXES[convention])
     ax.set_ylabel("innate test accuracy (%)")
     ax.set_title(str(results["dataset"]))
+    return ax
 
 
-def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]]) -> Figure:
-    """Figure 2, every parameter counted: one panel per dataset."""
-    fig, axes = subplots(
-        1, len(results_by_dataset), figsize=(5.2 * len(results_by_dataset), 4.0), squeeze=False
-    )
-    for ax, results in zip(axes[0], results_by_dataset.values(), strict=True):
-        plot_accuracy_vs_compression(ax, results)
-    axes[0, 0].legend(fontsize=8, loc="lower left")
-    return fig
-
-
-def figure2_conventions(results: Mapping[str, Any]) -> Figure:
-    """Figure 2 for one dataset under both counting conventions, side by side."""
-    fig, axes = subplots(1, 2, figsize=(10.4, 4.0), sharey=True)
-    for ax, convention in zip(axes, ("ours", "authors"), strict=True):
-        plot_accuracy_vs_compression(ax, results, convention)
+def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]], axes=None) -> np.ndarray:
+    """Figure 2, every parameter counted: one panel per dataset (``axes``: as many)."""
+    n = len(results_by_dataset)
+    axes = np.ravel(axes_or_new(axes, 1, n, figsize=(5.2 * n, 4.0), squeeze=False))
+    for ax, results in zip(axes, results_by_dataset.values(), strict=True):
+        plot_accuracy_vs_compression(results, ax=ax)
     axes[0].legend(fontsize=8, loc="lower left")
-    return fig
+    return axes
 
 
-def plot_kl_counting(ax: Axes, results: Mapping[str, Any], main_counting: str) -> None:
+def figure2_conventions(results: Mapping[str, Any], axes=None) -> np.ndarray:
+    """Figure 2 for one dataset under both counting conventions, side by side (2 axes)."""
+    axes = axes_or_new(axes, 1, 2, figsize=(10.4, 4.0), sharey=True)
+    for ax, convention in zip(axes, ("ours", "authors"), strict=True):
+        plot_accuracy_vs_compression(results, convention, ax=ax)
+    axes[0].legend(fontsize=8, loc="lower left")
+    return axes
+
+
+def plot_kl_counting(
+    results: Mapping[str, Any], main_counting: str, ax: Axes | None = None
+) -> Axes:
     """SGB innate accuracy with the sweep's KL counting ``main_counting`` and the other one
     (the ablation), at the ablation's compression ratios, mean +- SEM over seeds."""
+    ax = axes_or_new(ax, figsize=(5.2, 3.8))
     other = "table" if main_counting == "synapse" else "synapse"
     table = summarise_compression([r for r in results["records"] if r["model"] == "sgb"])["sgb"]
     ablation = summarise_compression(results["ablation_records"])["sgb"]
@@ -109,13 +115,17 @@ def plot_kl_counting(ax: Axes, results: Mapping[str, Any], main_counting: str) -
     ax.set_ylabel("innate test accuracy (%)")
     ax.set_title(f"{results['dataset']}: how the KL is counted")
     ax.legend(fontsize=8)
+    return ax
 
 
-def plot_dgb_budget(ax: Axes, budget: Mapping[str, Any], dense: Mapping[str, list]) -> None:
+def plot_dgb_budget(
+    budget: Mapping[str, Any], dense: Mapping[str, list], ax: Axes | None = None
+) -> Axes:
     """The DGB budget run (``sgb.experiments.dgb_budget``): innate test accuracy (%) of the
     best-validation network and of the network generated at each record, against write-back
     rounds; the uncompressed network's mean +- SEM over seeds (``dense``: a sweep summary
     row) and 3 points below it."""
+    ax = axes_or_new(ax, figsize=(6.4, 4.0))
     records = budget["records"]
     rounds = [r["rounds"] for r in records]
     ax.plot(
@@ -145,3 +155,4 @@ def plot_dgb_budget(ax: Axes, budget: Mapping[str, Any], dense: Mapping[str, lis
         f"(g-net width {records[-1]['gnet_width']})"
     )
     ax.legend(fontsize=8, loc="lower right")
+    return ax

@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.colors import ListedColormap
 
 from sgb import theory
-from sgb.plots import PALETTE, subplots
+from sgb.plots import PALETTE, axes_or_new
 
 TITLES = {"convex": "convex", "concave": "concave", "nonconvex": "non-convex"}
 
@@ -21,11 +21,11 @@ def types_label(cell_types) -> str:
     return "/".join("n" if k is None else str(k) for k in cell_types)
 
 
-def figure6(results: dict[str, Any]):
+def figure6(results: dict[str, Any], axes=None) -> np.ndarray:
     """The paper's Figure 6: per toy loss, the loss curve with mu's start (x) and end
     (triangle) and the population's spread (mu +- sigma), and Delta L over training."""
     runs = results["trajectories"]
-    fig, axes = subplots(2, len(runs), figsize=(12, 6.5))
+    axes = axes_or_new(axes, 2, len(runs), figsize=(12, 6.5))
     for col, (name, run) in enumerate(runs.items()):
         mu, sigma = _a(run["mu"]), _a(run["sigma"])
         lo = min(mu.min() - 2 * sigma.max(), -2.0)
@@ -64,13 +64,13 @@ def figure6(results: dict[str, Any]):
             ylabel=r"$\Delta L = \mathbb{E}[L(\mu + \sigma\epsilon)] - L(\mu)$",
         )
         bottom.legend(fontsize=7)
-    return fig
+    return axes
 
 
-def sign_scan(results: dict[str, Any]):
+def sign_scan(results: dict[str, Any], axes=None) -> np.ndarray:
     """Delta L before and after training, against the starting mean mu0, for every toy loss."""
     scan = results["sign_scan"]
-    fig, axes = subplots(1, len(scan), figsize=(12, 3.6))
+    axes = axes_or_new(axes, 1, len(scan), figsize=(12, 3.6))
     for ax, (name, row) in zip(axes, scan.items(), strict=True):
         mu0 = _a(row["mu0"])
         for stage, color in (("start", "k"), ("end", "red")):
@@ -86,10 +86,10 @@ def sign_scan(results: dict[str, Any]):
         )
         ax.set_yscale("symlog", linthresh=1e-4)
         ax.legend(fontsize=7)
-    return fig
+    return axes
 
 
-def sign_map(results: dict[str, Any]):
+def sign_map(results: dict[str, Any], axes=None) -> np.ndarray:
     """Non-convex loss: sign of Delta L over the starting point (mu0, sigma0), before and after
     training; grey where |Delta L| < 3 standard errors (not distinguishable from 0)."""
     grid = results["sign_map"]
@@ -98,7 +98,7 @@ def sign_map(results: dict[str, Any]):
     end_gap, end_se = _a(grid["gap_end"]), _a(grid["gap_stderr_end"])
     end = np.where(np.abs(end_gap) < 3 * end_se, 0.0, np.sign(end_gap))
     cmap = ListedColormap([PALETTE["individuals"], "#dddddd", PALETTE["mean_network"]])
-    fig, axes = subplots(1, 2, figsize=(11, 4), sharey=True)
+    axes = axes_or_new(axes, 1, 2, figsize=(11, 4), sharey=True)
     extent = (mu0[0], mu0[-1], sigma0[0], sigma0[-1])
     for ax, signs, title in ((axes[0], start, "before training"), (axes[1], end, "after training")):
         image = ax.imshow(
@@ -106,17 +106,17 @@ def sign_map(results: dict[str, Any]):
         )
         ax.set(title=f"sign of $\\Delta L$, {title}", xlabel=r"starting mean $\mu_0$")
     axes[0].set_ylabel(r"starting spread $\sigma_0$")
-    bar = fig.colorbar(image, ax=axes, ticks=[-1, 0, 1])
+    bar = axes[0].figure.colorbar(image, ax=axes, ticks=[-1, 0, 1])
     bar.ax.set_yticklabels(["< 0: individuals better", "~ 0 (within 3 SE)", "> 0: mean better"])
-    return fig
+    return axes
 
 
-def breakdown(results: dict[str, Any]):
+def breakdown(results: dict[str, Any], axes=None) -> np.ndarray:
     """Non-convex loss: measured Delta L, the second-order prediction and the exact value,
     against sigma, for several means mu."""
     data = results["breakdown"]
     sigma = _a(data["sigma"])
-    fig, axes = subplots(1, len(data["rows"]), figsize=(12, 3.6))
+    axes = axes_or_new(axes, 1, len(data["rows"]), figsize=(12, 3.6))
     for ax, row in zip(axes, data["rows"], strict=True):
         measured, se = _a(row["measured"]), _a(row["stderr"])
         ax.errorbar(
@@ -137,14 +137,14 @@ def breakdown(results: dict[str, Any]):
             ylabel=r"$\Delta L$",
         )
         ax.legend(fontsize=7)
-    return fig
+    return axes
 
 
-def network_gap(results: dict[str, Any]):
+def network_gap(results: dict[str, Any], axes=None) -> np.ndarray:
     """Trained digits classifiers: measured Delta L (training cross-entropy; training and test
     error) against the spread scale, next to the Hessian-trace prediction."""
     networks = results["network"]
-    fig, axes = subplots(1, 2, figsize=(11, 4))
+    axes = axes_or_new(axes, 1, 2, figsize=(11, 4))
     colors = (PALETTE["sgb"], PALETTE["dgb"], PALETTE["baseline"])
     for net, marker, color in zip(networks, "os^", colors, strict=False):
         label = "types " + types_label(net["cell_types"])
@@ -196,10 +196,10 @@ def network_gap(results: dict[str, Any]):
         ax.set_xticks(scales, [f"{c:g}" for c in scales])
         ax.minorticks_off()
         ax.legend(fontsize=7)
-    return fig
+    return axes
 
 
-def elbo_toy(results: dict[str, Any]):
+def elbo_toy(results: dict[str, Any], ax=None):
     """The ELBO's spread on the convex toy L = w^2/2: sigma over gradient steps for each KL
     weight c, trained as sigma = softplus(rho) (solid) and as sigma itself (thin), against
     the fixed point sqrt(c / (H + c lambda)) (dotted)."""
@@ -207,7 +207,7 @@ def elbo_toy(results: dict[str, Any]):
     steps = _a(toy["steps"])
     kl_weights = _a(toy["kl_weights"])
     predicted = _a(toy["predicted_sigma"])
-    fig, ax = subplots(figsize=(8, 4.2))
+    ax = axes_or_new(ax, figsize=(8, 4.2))
     colors = ("k", PALETTE["sgb"], PALETTE["individuals"], PALETTE["dgb"], PALETTE["authors"])
     floor = 1e-3
     for i, (c, color) in enumerate(zip(kl_weights, colors, strict=False)):
@@ -231,7 +231,7 @@ def elbo_toy(results: dict[str, Any]):
         ),
     )
     ax.legend(fontsize=7, ncol=2, loc="lower left")
-    return fig
+    return ax
 
 
 def _fixed_point_points(run: dict[str, Any], field: str) -> tuple[np.ndarray, np.ndarray]:
@@ -242,12 +242,13 @@ def _fixed_point_points(run: dict[str, Any], field: str) -> tuple[np.ndarray, np
     return sigma2, predicted
 
 
-def fixed_point(fixed_points: list[dict[str, Any]]):
+def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
     """Each digits classifier's learned sigma^2 per type pair against c / (H + c lambda):
     top, H at the trained means; bottom, H averaged over sampled individuals. One colour
     per training length; the dashed line is equality, the dotted one sigma^2 at
     initialisation."""
-    fig, axes = subplots(2, len(fixed_points), figsize=(5.5 * len(fixed_points), 8), squeeze=False)
+    n = len(fixed_points)
+    axes = axes_or_new(axes, 2, n, figsize=(5.5 * n, 8), squeeze=False)
     colors = (PALETTE["baseline"], PALETTE["sgb"], PALETTE["dgb"], PALETTE["individuals"])
     for col, net in enumerate(fixed_points):
         for row, (field, where) in enumerate(
@@ -287,4 +288,4 @@ def fixed_point(fixed_points: list[dict[str, Any]]):
                 title=f"types {types_label(net['cell_types'])}, {where}",
             )
             ax.legend(fontsize=7, loc="upper left")
-    return fig
+    return axes

@@ -3,7 +3,8 @@ sampled from one genome, and a drawing of the whole model (the paper's Figure 1)
 
 Weight matrices are drawn with presynaptic neurons down the rows and postsynaptic
 neurons along the columns, the layout of ``W[a, b]``, in one diverging colour map
-symmetric about zero; every function takes the axes to draw on and returns them.
+symmetric about zero; every function draws on the axes given (``ax``/``axes``; new ones
+if none) and returns them.
 """
 
 from collections.abc import Sequence
@@ -15,6 +16,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
 from sgb.celltypes import assign_cell_types, expand_table, type_sizes
+from sgb.plots import axes_or_new
 
 WEIGHTS = mpl.colormaps["RdBu_r"]  # negative blue, positive red
 SPREADS = mpl.colormaps["Purples"]
@@ -40,16 +42,17 @@ def type_boundaries(n: int, k: int) -> np.ndarray:
 
 
 def weight_matrix(
-    ax: Axes,
     matrix,
     types: Sequence[int] | None = None,
     limit: float | None = None,
     title: str | None = None,
     labels: bool = True,
+    ax: Axes | None = None,
 ) -> Axes:
     """``matrix`` (n_in, n_out) as an image in the weight colours, symmetric about 0 up to
     ``limit`` (default its largest |weight|); ``types`` = (k_in, k_out) draws the borders
     of the type-pair blocks."""
+    ax = axes_or_new(ax)
     matrix = np.asarray(matrix)
     if matrix.ndim != 2:
         raise ValueError(f"matrix must be 2-D (n_in, n_out), got shape {matrix.shape}")
@@ -77,16 +80,17 @@ def weight_matrix(
     return ax
 
 
-def expansion(axes: Sequence[Axes], table, shape: Sequence[int]) -> Sequence[Axes]:
+def expansion(table, shape: Sequence[int], axes: Sequence[Axes] | None = None) -> Sequence[Axes]:
     """A type table (k_in, k_out), each entry written in its cell (left), and the full
     weight matrix ``expand_table(table, shape)`` it expands to (right), in one colour
     scale, the blocks of each type pair outlined."""
+    axes = axes_or_new(axes, 1, 2, figsize=(8, 3.8), width_ratios=[2, 3])
     table = np.asarray(table)
     full = np.asarray(expand_table(table, tuple(shape)))
     limit = _limit(table)
     left, right = axes
     weight_matrix(
-        left, table, limit=limit, title=f"type table, {table.shape[0]} x {table.shape[1]}"
+        table, limit=limit, title=f"type table, {table.shape[0]} x {table.shape[1]}", ax=left
     )
     left.set_xlabel("postsynaptic type $j$")
     left.set_ylabel("presynaptic type $i$")
@@ -95,27 +99,32 @@ def expansion(axes: Sequence[Axes], table, shape: Sequence[int]) -> Sequence[Axe
         color = "white" if dark else "black"
         left.text(j, i, f"{value:.2g}", ha="center", va="center", fontsize=9, color=color)
     weight_matrix(
-        right,
         full,
         types=table.shape,
         limit=limit,
         title=f"expanded weight matrix, {full.shape[0]} x {full.shape[1]}",
+        ax=right,
     )
     return axes
 
 
 def individuals(
-    axes: Sequence[Axes], kernels, types: Sequence[int], limit: float | None = None
+    kernels,
+    types: Sequence[int],
+    limit: float | None = None,
+    axes: Sequence[Axes] | None = None,
 ) -> Sequence[Axes]:
     """The weight matrices of individuals side by side, ``kernels`` (N, n_in, n_out), one
     per axes, in one colour scale, the type-pair blocks outlined; only the first panel
     names its axes."""
     kernels = np.asarray(kernels)
-    if len(axes) != len(kernels):
+    n = len(kernels)
+    axes = np.ravel(axes_or_new(axes, 1, n, figsize=(2.75 * n, 3.3), squeeze=False))
+    if len(axes) != n:
         raise ValueError(f"{len(kernels)} individuals need as many axes, got {len(axes)}")
     limit = _limit(kernels, limit=limit)
     for q, (ax, kernel) in enumerate(zip(axes, kernels, strict=True)):
-        weight_matrix(ax, kernel, types, limit, f"individual {q + 1}", labels=q == 0)
+        weight_matrix(kernel, types, limit, f"individual {q + 1}", labels=q == 0, ax=ax)
     return axes
 
 
@@ -170,7 +179,7 @@ def _table(ax, values, x0, y0, cell, colors, label):
     return patches
 
 
-def model_schematic(ax: Axes, mu, sigma, kernels, limit: float | None = None) -> Axes:
+def model_schematic(mu, sigma, kernels, limit: float | None = None, ax: Axes | None = None) -> Axes:
     """The model in one picture, as the paper's Figure 1 draws it: the genome's type
     tables of means ``mu`` and spreads ``sigma`` (k_in, k_out), development drawing every
     synapse from its pair's normal distribution, and the individuals that result,
@@ -182,6 +191,7 @@ def model_schematic(ax: Axes, mu, sigma, kernels, limit: float | None = None) ->
     individual's synapses one ``LineCollection`` of ``ax.collections`` (row-major over
     (a, b)), so what is drawn can be read back.
     """
+    ax = axes_or_new(ax, figsize=(11, 3.6))
     mu, sigma, kernels = np.asarray(mu), np.asarray(sigma), np.asarray(kernels)
     if mu.shape != sigma.shape or mu.ndim != 2:
         raise ValueError(f"mu and sigma must be equal 2-D tables, got {mu.shape}, {sigma.shape}")

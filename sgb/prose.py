@@ -1,0 +1,267 @@
+"""What the chapters' prose says of the committed results: glue name -> markdown text.
+
+Each function returns every name its part of a chapter glues (``book.glue_all``), so a
+chapter cell is one call. A scorecard row missing from ``card`` (its results not yet
+run) gives ``NOT_RUN`` for each of its names; a missing results file (``None``) gives
+the fallback its function names.
+"""
+
+import math
+from importlib import metadata
+
+import numpy as np
+
+from sgb import claims, verdicts
+from sgb.claims import Row
+from sgb.results import Payload
+from sgb.rl.regimes import authors_scale
+
+NOT_RUN = "not yet run"
+ROW_PARTS = ("verdict", "ours", "detectable", "decide")
+Card = dict[str, list[Row]]  # claims.by_key(claims.scorecard(...))
+
+
+def row_texts(name: str, row: Row | None, missing: str = NOT_RUN) -> dict[str, str]:
+    """A scorecard row as ``{name}_verdict`` (bold), ``_ours`` (estimate with its 95 %
+    interval), ``_detectable`` (the effect detectable at 80 % power, "-" without a test)
+    and ``_decide`` (the budget that would decide); ``missing`` for each without a row."""
+    if row is None:
+        return {f"{name}_{part}": missing for part in ROW_PARTS}
+    detectable = math.nan if row.test is None else row.test.detectable
+    return {
+        f"{name}_verdict": f"**{row.verdict}**",
+        f"{name}_ours": row.ours,
+        f"{name}_detectable": "-" if math.isnan(detectable) else f"{detectable:.3g}",
+        f"{name}_decide": row.decide or "nothing more",
+    }
+
+
+def _row(card: Card, key: str, setting: str = "") -> Row | None:
+    """The first row of claim ``key`` whose setting names ``setting``, or ``None``."""
+    return next((r for r in card.get(key, []) if setting in r.setting), None)
+
+
+GENOMES = (("our genome", "ours"), ("the authors' genome", "authors"))
+
+
+# Chapter 5 --------------------------------------------------------------------------------
+
+
+def backends(bench: Payload) -> dict[str, str]:
+    """``mjx_vs_spring`` (MJX's training env-steps/s over spring's), ``fastest_backend`` and
+    the installed ``brax_version``, from ``rl/bench_backends.json``."""
+    speeds = {name: s["train_steps_per_s"] for name, s in bench["results"]["throughput"].items()}
+    return {
+        "mjx_vs_spring": f"{speeds['mjx'] / speeds['spring']:.2f}x",
+        "fastest_backend": f"`{max(speeds, key=speeds.get)}`",
+        "brax_version": metadata.version("brax"),
+    }
+
+
+def regime(payload: Payload) -> dict[str, str]:
+    """The authors' regime (``rl/regime_ant_cpu.json``): vanilla seed 0's final and
+    last-two returns, env steps, authors' scale, env-steps/s and wall time (``regime_*``),
+    and ``regime_sgb``: each SGB run's last-two return as a fraction of vanilla's."""
+    runs = payload["results"]["runs"]
+    vanilla = next(r for r in runs if r["cell_types"] is None and r["seed"] == 0)
+    sgb_runs = [r for r in runs if r["cell_types"] is not None]
+    return {
+        "regime_vanilla": (
+            f"{vanilla['final_return']:.0f} (last two: {vanilla['last_two_return']:.0f})"
+        ),
+        "regime_steps": f"{vanilla['eval_steps'][-1]:.3g}",
+        "regime_vanilla_scale": f"{vanilla['authors_scale']:.2f}",
+        "regime_speed": f"{vanilla['train_steps_per_s']:,.0f}",
+        "regime_wall": f"{vanilla['wall_time_s'] / 3600:.1f} h",
+        "regime_sgb": "; ".join(
+            f"{r['cell_types']} types, seed {r['seed']}: "
+            f"{r['last_two_return'] / vanilla['last_two_return']:.2f} of vanilla"
+            for r in sgb_runs
+        )
+        or "none yet",
+    }
+
+
+def populations(payload: Payload | None) -> dict[str, str]:
+    """The populations experiment (``rl/populations_ant_cpu.json``): ``pop_complete``
+    (genomes summarised) and, per genome settings, its Figure 5 and 4E rows
+    (``pop_fig5_{ours,authors}_*``, ``pop_fig4e_*``); without the file, "none of the
+    genomes" and ``NOT_RUN``."""
+    if payload is None:
+        return {"pop_complete": "none of the genomes"} | populations_rows_texts([])
+    genomes = payload["results"]["genomes"]
+    done = sum("summary" in g for g in genomes.values())
+    rows = claims.populations_rows(payload["results"])
+    return {"pop_complete": f"{done} of {len(genomes)} genomes"} | populations_rows_texts(rows)
+
+
+def regime_populations(payload: Payload | None) -> dict[str, str]:
+    """Figures 4E and 5 on the genome of the authors' regime
+    (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``), the
+    normal body's test-retest reliability (``regime_pop_retest``: split-half r with its
+    95 % interval, and the reliability of the episode mean), and the rows of
+    ``claims.regime_population_rows``: Figure 4E (``regime_pop_legs_*``) and Figure 5
+    under our protocol (``regime_pop_ours_*``), their one-sample t
+    (``regime_pop_theirs_*``) and Welch's (``regime_pop_welch_*``); ``NOT_RUN`` for all
+    without the file or its summary."""
+    rows = [] if payload is None else claims.regime_population_rows(payload["results"])
+    fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"] + [None] * 3
+    texts = {"regime_pop_design": NOT_RUN, "regime_pop_retest": NOT_RUN}
+    if rows:
+        genome = next(g for g in payload["results"]["genomes"].values() if "summary" in g)
+        normal = genome["summary"]["normal"]
+        split, anova = normal["split_half"], normal["variance_split"]
+        texts["regime_pop_design"] = rows[0].budget
+        texts["regime_pop_retest"] = (
+            f"r = {split['r']:.2f} [{split['r_ci'][0]:.2f}, {split['r_ci'][1]:.2f}] between "
+            f"the means of the even and the odd of {split['episodes']} episodes, a "
+            f"reliability of {anova['reliability']:.2f} for the mean of all of them"
+        )
+    texts |= row_texts("regime_pop_legs", next((r for r in rows if r.key == "fig4e.r_legs"), None))
+    for name, row in zip(("ours", "theirs", "welch"), fig5, strict=False):
+        texts |= row_texts(f"regime_pop_{name}", row)
+    return texts
+
+
+def populations_rows_texts(rows: list[Row]) -> dict[str, str]:
+    """``row_texts`` of the populations experiment's Figure 5 and 4E rows per settings."""
+    card = claims.by_key(rows)
+    texts = {}
+    for who, settings in GENOMES:
+        for figure, key in (("fig5", "fig5.population_beats_mean"), ("fig4e", "fig4e.r_legs")):
+            texts |= row_texts(f"pop_{figure}_{settings}", _row(card, key, who))
+    return texts
+
+
+def _vanilla(prefix: str, payload: Payload) -> dict[str, str]:
+    """A Figure 3 sweep's steps per run (``{prefix}_steps``, millions), vanilla PPO's mean
+    last-two return over its seeds (``_vanilla``), their number (``_vanilla_n``) and that
+    mean on the authors' scale (``_vanilla_theirs``)."""
+    results = payload["results"]
+    vanilla = [r for r in results["runs"] if r["cell_types"] is None]
+    steps = payload["provenance"]["config"]["ppo"]["total_steps"]
+    mean = float(np.mean([r["last_two_return"] for r in vanilla]))
+    return {
+        f"{prefix}_steps": f"{steps / 1e6:g}M",
+        f"{prefix}_vanilla": f"{mean:.0f}",
+        f"{prefix}_vanilla_n": str(len(vanilla)),
+        f"{prefix}_vanilla_theirs": f"{authors_scale(results['env'], mean):.2f}",
+    }
+
+
+def _level_and_fall(prefix: str, env: str, card: Card) -> dict[str, str]:
+    """Figure 3's level at 128 types and fall to 16 types on ``env``, per genome settings
+    (``{prefix}level_ours_*``, ...), each with ``_power``: the power to detect 0.3."""
+    texts = {}
+    for who, settings in GENOMES:
+        for what in ("level", "fall"):
+            key = f"fig3.level_128.{env}" if what == "level" else f"fig3.fall_16.{env}"
+            row = _row(card, key, who)
+            name = f"{prefix}{what}_{settings}"
+            texts |= row_texts(name, row)
+            power = None if row is None or row.test is None else verdicts.power_at(row.test, 0.3)
+            texts[f"{name}_power"] = NOT_RUN if power is None else f"{power:.0%}"
+    return texts
+
+
+def figure3(ant: Payload, cheetah: Payload, card: Card) -> dict[str, str]:
+    """Figure 3 on both bodies: the sweeps' vanilla numbers (``ant_*``, ``hc_*``), the level
+    and fall rows (``level_*``, ``fall_*``, ``cheetah_level_*``, ``cheetah_fall_*``) and the
+    typing ablation (``typing_{authors,ours}_*``; "not yet run (fewer than 2 seeds)")."""
+    texts = _vanilla("ant", ant) | _vanilla("hc", cheetah)
+    texts |= _level_and_fall("", "ant", card) | _level_and_fall("cheetah_", "halfcheetah", card)
+    typing = {r.setting.split(",")[0]: r for r in card.get("ch5.typing_explains_fall", [])}
+    for who, settings in GENOMES:
+        missing = f"{NOT_RUN} (fewer than 2 seeds)"
+        texts |= row_texts(f"typing_{settings}", typing.get(who), missing)
+    return texts
+
+
+def figures4_5(card: Card) -> dict[str, str]:
+    """Figure 4E's correlation between bodies (``legs_*``) and Figure 5's individuals
+    against the mean network under our protocol and the authors' (``fig5_ours_*``,
+    ``fig5_theirs_*``): the first rows of each claim, those of the one genome."""
+    fig5 = card.get("fig5.population_beats_mean", []) + [None, None]
+    texts = row_texts("legs", _row(card, "fig4e.r_legs"))
+    return texts | row_texts("fig5_ours", fig5[0]) | row_texts("fig5_theirs", fig5[1])
+
+
+# Chapter 4 --------------------------------------------------------------------------------
+
+
+def _percent(value: float) -> str:
+    return f"{100 * value:.1f} %"
+
+
+def figure2(results: dict, card: Card) -> dict[str, str]:
+    """Figure 2 on Fashion-MNIST (``fig2_fashion-mnist_cpu.json``'s results): the
+    scorecard rows (``f2_low``, ``f2_high400``, ``f2_high700``, ``f2_slow``, ``f2_cross``),
+    accuracies (``f2_dense``, ``f2_dgb_10x``, ``f2_dgb_best``, ``f2_sgb_10x``), the mean
+    network's range (``f2_meannet_range``) and the crossovers of each count
+    (``f2_crossing_{ours,authors}``)."""
+    high = card.get("fig2.sgb_better_high", [])
+    rows = {
+        "f2_low": _row(card, "fig2.dgb_better_low"),
+        "f2_high400": high[0] if high else None,
+        "f2_high700": high[1] if len(high) > 1 else None,
+        "f2_slow": _row(card, "fig2.sgb_declines_slowly"),
+        "f2_cross": _row(card, "fig2.crossover"),
+    }
+    texts = {}
+    for name, row in rows.items():
+        texts |= row_texts(name, row)
+    summary = results["ours"]["summary"]
+    means = results["ours"]["summary_mean_network"]["sgb"]["mean"]
+    texts |= {
+        "f2_dense": _percent(summary["dense"]["mean"][0]),
+        "f2_dgb_10x": _percent(summary["dgb"]["mean"][0]),
+        "f2_dgb_best": _percent(max(summary["dgb"]["mean"])),
+        "f2_sgb_10x": _percent(summary["sgb"]["mean"][0]),
+        "f2_meannet_range": f"{100 * min(means[:-1]):.0f}-{100 * max(means):.0f} %",
+    }
+    for convention in ("ours", "authors"):
+        crossings = results[convention]["crossovers"]
+        texts[f"f2_crossing_{convention}"] = ", ".join(f"{c:.0f}x" for c in crossings) or "none"
+    return texts
+
+
+def mean_gap(results: dict) -> dict[str, str]:
+    """The moment-matched network (``mean_gap_fashion-mnist_cpu.json``'s results): at 10x
+    and 400x from rho -5 and at 10x from rho -7 (``gap10``, ``gap400``, ``gap10_rho7``),
+    each network's accuracy (% +- SEM), the recovery and the trained sigma; per rho start,
+    the hidden layer's rho travel and end (``gap_travel_5``, ``gap_rho_end_7``, ...), and
+    the training steps (``gap_steps``)."""
+    cells = {(r["setting"], r["rho_init"]): r for r in results["summary"]}
+    texts = {}
+    for name, cell in (("gap10", (785, -5.0)), ("gap400", (10, -5.0)), ("gap10_rho7", (785, -7.0))):
+        row = cells[cell]
+        for key in ("accuracy", "mean_network", "moment_network"):
+            texts[f"{name}_{key}"] = f"{100 * row[key]:.1f} ± {100 * row[key + '_sem']:.1f} %"
+        texts[f"{name}_recovery"] = f"{row['moment_recovery']:.2f}"
+        texts[f"{name}_sigma"] = f"{row['sigma_end']:.3f}"
+    for r in results["records"]:
+        if r["setting"] == 785 and r["seed"] == 0:
+            layer = r["layers"][0]
+            texts[f"gap_travel_{-r['rho_init']:g}"] = f"{layer['rho_travel_fraction']:.2f}"
+            texts[f"gap_rho_end_{-r['rho_init']:g}"] = f"{layer['end']['mean_rho']:.2f}"
+    texts["gap_steps"] = str(results["records"][0]["steps"])
+    return texts
+
+
+def dgb_budget(results: dict, dense_accuracy: float) -> dict[str, str]:
+    """The DGB budget run (``dgb_budget_fashion-mnist_cpu.json``'s results): test accuracy
+    after 25, 100, 250 and 500 rounds (``budget_25``, ...), the first round within 3 points
+    of ``dense_accuracy`` (a fraction; ``budget_near_rounds``), the best validation at 500
+    (``budget_val_500``) and the uncompressed network at the same budget (``budget_same``,
+    ``budget_same_epochs``)."""
+    records = results["records"]
+    at = {r["rounds"]: r for r in records}
+    near = next(r for r in records if r["test_accuracy"] >= dense_accuracy - 0.03)
+    same = results["uncompressed_same_budget"]
+    texts = {f"budget_{n}": _percent(at[n]["test_accuracy"]) for n in (25, 100, 250, 500)}
+    return texts | {
+        "budget_near_rounds": str(near["rounds"]),
+        "budget_val_500": _percent(at[500]["best_validation_accuracy"]),
+        "budget_same": _percent(same["accuracy"]),
+        "budget_same_epochs": str(same["epochs"]),
+    }

@@ -1,0 +1,173 @@
+"""The committed results as data: a file's payload, its provenance in one line, tidy tables.
+
+``name`` is a results file's path under ``results_dir`` (default
+``sgb.paths.committed_results()``), e.g. ``"rl/fig3_ant_cpu.json"``. Each table is a
+``pandas.DataFrame`` with one row per run, cell or record and the file's values
+unchanged (returns in reward units, accuracies as fractions, times in seconds).
+"""
+
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from sgb.paths import committed_results
+from sgb.provenance import read_results
+
+Payload = dict[str, Any]  # a results file: {"results": ..., "provenance": ...}
+
+
+def path(name: str, results_dir: str | Path | None = None) -> Path:
+    """Where the results file ``name`` lies under ``results_dir``."""
+    return Path(committed_results() if results_dir is None else results_dir) / name
+
+
+def load(
+    name: str, results_dir: str | Path | None = None, missing_ok: bool = False
+) -> Payload | None:
+    """The payload of results file ``name``; ``None`` if it is absent and ``missing_ok``,
+    else ``FileNotFoundError`` naming it."""
+    file = path(name, results_dir)
+    if file.exists():
+        return read_results(file)
+    if missing_ok:
+        return None
+    raise FileNotFoundError(f"no results file {file}: run `python -m sgb reproduce` for it")
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 2 * 3600:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def provenance_line(payload: Payload) -> str:
+    """One line of where a results file comes from: profile, seeds, the commits that ran
+    it (10 hex digits each, ``+dirty`` kept), date and wall time on its backend."""
+    record = payload["provenance"]
+    shown = (c[:10] + c[40:] for c in record.get("git_commits", [record["git_commit"]]))
+    commits = ", ".join(dict.fromkeys(shown))  # in order, each once
+    return (
+        f"profile {record['profile']}, seeds {record['seeds']}, commit {commits}, "
+        f"{record['date'][:10]}, {_duration(record['wall_time_s'])} on {record['backend']}"
+    )
+
+
+def fig3_summary(payload: Payload) -> list[dict]:
+    """A Figure 3 sweep's summary rows (one per settings and cell types), scored by the
+    mean of the last two evaluations where the file has that score, else by the last."""
+    results = payload["results"]
+    return results.get("summary_last_two", results["summary"])
+
+
+FIG3_COLUMNS = ["env", "settings", "cell_types", "score", "mean_return", "sem_return"]
+FIG3_COLUMNS += ["fraction", "sem_fraction", "n_seeds", "steps"]
+
+
+def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
+    """Figure 3 sweeps, one row per env, settings, cell types ("vanilla" for PPO) and score
+    ("last" evaluation or mean of the "last_two"), with the sweep's env steps per run."""
+    tables = []
+    for payload in payloads:
+        results = payload["results"]
+        for score in ("summary", "summary_last_two"):
+            if score in results:
+                table = pd.DataFrame(results[score]).assign(
+                    env=results["env"],
+                    score=score[8:] or "last",
+                    steps=payload["provenance"]["config"]["ppo"]["total_steps"],
+                )
+                tables.append(table)
+    table = pd.concat(tables, ignore_index=True)
+    table["cell_types"] = ["vanilla" if pd.isna(k) else f"{k:.0f}" for k in table["cell_types"]]
+    return table[FIG3_COLUMNS]
+
+
+REGIME_COLUMNS = ["cell_types", "seed", "final_return", "last_two_return", "authors_scale"]
+REGIME_COLUMNS += ["train_steps_per_s", "wall_time_s"]
+
+
+def regime_table(payload: Payload) -> pd.DataFrame:
+    """The authors' regime (``sgb.experiments.regime``), one row per run: final and
+    last-two evaluation returns, the final one on the authors' Figure 3 scale, training
+    env-steps/s and wall time."""
+    return pd.DataFrame(payload["results"]["runs"])[REGIME_COLUMNS]
+
+
+def spread_table(payload: Payload) -> pd.DataFrame:
+    """The spread sweep (``sgb.experiments.rl_spread``), one row per run: initial and
+    trained sigma, mean returns of the individuals and the mean network, the SD of the
+    individuals' returns, and the paired t over individuals with its p."""
+    return pd.DataFrame(
+        {
+            "sigma start": r["sigma_init"],
+            "seed": r["seed"],
+            "sigma trained": r["sigma_trained"],
+            "individuals": r["individuals_mean"],
+            "mean network": r["mean_network_mean"],
+            "SD of individuals": r["individuals_sd"],
+            "paired t(99)": r["paired_test"]["t"],
+            "p": r["paired_test"]["p"],
+        }
+        for r in payload["results"]["runs"]
+    )
+
+
+def fig45_statistics(fig4: Payload, fig5: Payload) -> pd.Series:
+    """Figures 4E/F and 5 in numbers: Pearson r and p between bodies and between niches;
+    our paired t and the authors' one-sample t, with the means of the individuals and of
+    the mean network (the centres of their 99 % intervals)."""
+    legs, niches = fig4["results"]["legs"], fig4["results"]["niches"]
+    paired, authors = fig5["results"]["mean_network"], fig5["results"]["authors_protocol"]
+    values = {"4E legs r": legs["r"], "4E legs p": legs["p"]}
+    values |= {"4F niches r": niches["r"], "4F niches p": niches["p"]}
+    for name, test, t in (("5 ours", paired, "paired t"), ("5 authors", authors, "one-sample t")):
+        values |= {
+            f"{name}: {t}": test["t"],
+            f"{name}: p": test["p"],
+            f"{name}: individuals mean": test["individuals_ci99"][0],
+            f"{name}: mean network": test["mean_network_ci99"][0],
+        }
+    return pd.Series(values, name="value")
+
+
+def figure2_table(results: dict) -> pd.DataFrame:
+    """A Figure 2 sweep (``sgb.experiments.fig2``), one row per model and setting: its
+    compression counted both ways, and innate test accuracy (%) mean and SEM over seeds
+    (NaN with one seed)."""
+    ours, theirs = results["ours"]["summary"], results["authors"]["summary"]
+    rows = []
+    for model in ("dense", "sgb", "dgb"):
+        authors_compression = dict(
+            zip(theirs[model]["setting"], theirs[model]["compression"], strict=True)
+        )
+        for i, setting in enumerate(ours[model]["setting"]):
+            sem = ours[model]["sem"][i]
+            rows.append(
+                {
+                    "model": model,
+                    "setting": setting,
+                    "compression (ours)": ours[model]["compression"][i],
+                    "compression (authors')": authors_compression[setting],
+                    "accuracy %": 100 * ours[model]["mean"][i],
+                    "SEM %": float("nan") if sem is None else 100 * sem,
+                    "seeds": ours[model]["n"][i],
+                }
+            )
+    return pd.DataFrame(rows)
+
+
+def dgb_budget_table(results: dict) -> pd.DataFrame:
+    """The DGB budget run (``sgb.experiments.dgb_budget``), one row per recorded round:
+    best validation accuracy, its network's test accuracy and the generated network's (%)."""
+    return pd.DataFrame(
+        {
+            "rounds": r["rounds"],
+            "best validation %": 100 * r["best_validation_accuracy"],
+            "its test %": 100 * r["test_accuracy"],
+            "generated test %": 100 * r["generated_test_accuracy"],
+        }
+        for r in results["records"]
+    ).set_index("rounds")

@@ -1,0 +1,119 @@
+"""``sgb.prose``: every name a chapter's prose glues has its text, from the committed files,
+and missing results give the documented fallbacks."""
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+from sgb import book, claims, prose, results
+from sgb.experiments import rl_spread
+from sgb.paths import committed_results
+
+BOOK = Path(__file__).resolve().parent.parent / "book"
+# names a chapter glues from what it computes while it runs, not from results files
+COMPUTED = {
+    "04_dgb_vs_sgb": {"nominal_30_real", "nominal_1500_real"},
+    "05_brax_populations": {"walk_sigma_narrow", "walk_sigma_wide", "walk_steps", "walk_episodes"},
+}
+
+
+def prose_names(chapter: str) -> set[str]:
+    """The glue names of the ``{glue}`` roles in a chapter's markdown cells."""
+    notebook = json.loads((BOOK / f"{chapter}.ipynb").read_text())
+    text = "".join("".join(c["source"]) for c in notebook["cells"] if c["cell_type"] == "markdown")
+    return set(re.findall(r"\{glue(?::\w+)?\}`([^`]+)`", text))
+
+
+@pytest.fixture(scope="module")
+def card() -> prose.Card:
+    return claims.by_key(claims.scorecard(committed_results()))
+
+
+def chapter_texts(chapter: str, card: prose.Card) -> dict[str, str]:
+    """What the chapter's cells glue from the committed results, the calls they make."""
+    if chapter == "04_dgb_vs_sgb":
+        fashion = results.load("fig2_fashion-mnist_cpu.json")["results"]
+        dense = fashion["ours"]["summary"]["dense"]["mean"][0]
+        budget = results.load("dgb_budget_fashion-mnist_cpu.json")["results"]
+        gap = results.load("mean_gap_fashion-mnist_cpu.json")["results"]
+        return prose.figure2(fashion, card) | prose.mean_gap(gap) | prose.dgb_budget(budget, dense)
+    fig3 = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
+    spread = results.load("rl/spread_ant_cpu.json")["results"]["runs"]
+    return (
+        prose.backends(results.load("rl/bench_backends.json"))
+        | prose.regime(results.load("rl/regime_ant_cpu.json"))
+        | prose.populations(results.load("rl/populations_ant_cpu.json"))
+        | prose.regime_populations(
+            results.load("rl/regime_populations_ant_cpu.json", missing_ok=True)
+        )
+        | prose.figure3(*fig3, card)
+        | prose.figures4_5(card)
+        | rl_spread.spread_prose(spread)
+    )
+
+
+@pytest.mark.parametrize("chapter", sorted(COMPUTED))
+def test_each_name_of_the_prose_is_glued_from_results_or_computed(chapter, card):
+    texts = chapter_texts(chapter, card)
+    assert sorted(prose_names(chapter) - COMPUTED[chapter] - set(texts)) == []
+    assert not COMPUTED[chapter] & set(texts)
+    assert all(isinstance(t, str) and t for t in texts.values())
+
+
+def test_row_texts_read_the_scorecard_row(card):
+    row = card["fig3.fall_16.ant"][0]
+    texts = prose.row_texts("fall", row)
+    assert texts["fall_verdict"] == f"**{row.verdict}**"
+    assert texts["fall_ours"] == row.ours
+    assert texts["fall_detectable"] == f"{row.test.detectable:.3g}"
+    assert texts["fall_decide"] == (row.decide or "nothing more")
+    untested = prose.row_texts("cifar", card["fig2.cifar"][0])
+    assert untested["cifar_detectable"] == "-"
+
+
+def test_missing_rows_and_files_give_the_fallback_texts():
+    fig3 = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
+    texts = prose.figure3(*fig3, card={})
+    for name in ("level_ours", "fall_authors", "cheetah_fall_ours"):
+        assert {texts[f"{name}_{part}"] for part in (*prose.ROW_PARTS, "power")} == {"not yet run"}
+    assert texts["typing_ours_verdict"] == "not yet run (fewer than 2 seeds)"
+    assert texts["ant_vanilla_n"] == "10"  # the sweep's own numbers do not need the card
+    missing = prose.populations(None)
+    assert missing.pop("pop_complete") == "none of the genomes"
+    assert set(missing.values()) == {prose.NOT_RUN}
+    assert len(missing) == 2 * 2 * len(prose.ROW_PARTS)  # 2 settings x 2 figures
+    assert set(prose.figures4_5({}).values()) == {prose.NOT_RUN}
+    assert set(prose.regime_populations(None).values()) == {prose.NOT_RUN}
+
+
+def test_the_texts_are_the_files_values():
+    regime = results.load("rl/regime_ant_cpu.json")
+    vanilla = next(
+        r for r in regime["results"]["runs"] if r["cell_types"] is None and r["seed"] == 0
+    )
+    texts = prose.regime(regime)
+    assert texts["regime_vanilla"].startswith(f"{vanilla['final_return']:.0f} (last two: ")
+    assert texts["regime_wall"] == f"{vanilla['wall_time_s'] / 3600:.1f} h"
+    bench = results.load("rl/bench_backends.json")["results"]["throughput"]
+    ratio = bench["mjx"]["train_steps_per_s"] / bench["spring"]["train_steps_per_s"]
+    assert prose.backends(results.load("rl/bench_backends.json"))["mjx_vs_spring"] == (
+        f"{ratio:.2f}x"
+    )
+    fashion = results.load("fig2_fashion-mnist_cpu.json")["results"]
+    dense = fashion["ours"]["summary"]["dense"]["mean"][0]
+    assert prose.figure2(fashion, {})["f2_dense"] == f"{100 * dense:.1f} %"
+
+
+def test_regime_without_sgb_runs_says_none_yet():
+    regime = results.load("rl/regime_ant_cpu.json")
+    regime["results"]["runs"] = [r for r in regime["results"]["runs"] if r["cell_types"] is None]
+    assert prose.regime(regime)["regime_sgb"] == "none yet"
+
+
+def test_glue_all_glues_every_text(monkeypatch):
+    glued = {}
+    monkeypatch.setattr(book, "glue", lambda name, text: glued.__setitem__(name, text))
+    book.glue_all({"a": "1 %", "b": "**reproduced**"})
+    assert glued == {"a": "1 %", "b": "**reproduced**"}

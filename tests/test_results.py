@@ -1,0 +1,119 @@
+"""The results-reading layer (``sgb.results``) gives the committed files' own values."""
+
+import json
+import math
+
+import pytest
+
+from sgb import results
+from sgb.paths import committed_results
+
+
+def raw(name: str) -> dict:
+    """A committed results file as plain JSON, read without the package."""
+    return json.loads((committed_results() / name).read_text())
+
+
+def test_load_reads_the_committed_file_and_names_a_missing_one(tmp_path):
+    assert results.load("rl/fig3_ant_cpu.json") == raw("rl/fig3_ant_cpu.json")
+    assert results.path("theory_cpu.json") == committed_results() / "theory_cpu.json"
+    assert results.load("absent.json", tmp_path, missing_ok=True) is None
+    with pytest.raises(FileNotFoundError, match="absent.json"):
+        results.load("absent.json", tmp_path)
+
+
+def test_provenance_line_names_profile_seeds_commits_date_and_wall_time():
+    payload = raw("fig2_fashion-mnist_cpu.json")
+    record = payload["provenance"]
+    line = results.provenance_line(payload)
+    assert "\n" not in line
+    assert line.startswith(f"profile {record['profile']}, seeds {record['seeds']}, ")
+    assert all(commit[:10] in line for commit in record["git_commits"])
+    budget = results.provenance_line(raw("dgb_budget_fashion-mnist_cpu.json"))
+    assert budget.count("9dbd713a4e,") == 1 and "9dbd713a4e+dirty" in budget  # each once
+    assert record["date"][:10] in line
+    assert f"{record['wall_time_s'] / 60:.0f} min on {record['backend']}" in line
+
+
+@pytest.mark.parametrize(
+    ("seconds", "shown"), [(313.1, "5 min"), (59.6, "60 s"), (28236.56, "7.8 h")]
+)
+def test_provenance_line_gives_the_wall_time_in_a_readable_unit(seconds, shown):
+    record = {"profile": "cpu", "seeds": [0], "git_commit": "0123456789abcdef", "backend": "cpu"}
+    payload = {"provenance": record | {"date": "2026-12-01T20:18:05+00:00", "wall_time_s": seconds}}
+    line = results.provenance_line(payload)
+    assert line == f"profile cpu, seeds [0], commit 0123456789, 2026-12-01, {shown} on cpu"
+
+
+def test_fig3_table_holds_every_summary_row_of_both_sweeps_unchanged():
+    payloads = [raw(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
+    table = results.fig3_table(payloads)
+    expected = [
+        (p["results"]["env"], score, row)
+        for p in payloads
+        for score in ("summary", "summary_last_two")
+        for row in p["results"].get(score, [])
+    ]
+    assert len(table) == len(expected)
+    for (_, got), (env, score, row) in zip(table.iterrows(), expected, strict=True):
+        assert got["env"] == env and got["score"] == (score[8:] or "last")
+        k = row["cell_types"]
+        assert got["cell_types"] == ("vanilla" if k is None else str(k))
+        assert got["mean_return"] == row["mean_return"] and got["n_seeds"] == row["n_seeds"]
+    assert set(table["steps"]) == {
+        p["provenance"]["config"]["ppo"]["total_steps"] for p in payloads
+    }
+
+
+def test_fig3_summary_prefers_the_last_two_score():
+    ant = raw("rl/fig3_ant_cpu.json")
+    assert results.fig3_summary(ant) == ant["results"]["summary_last_two"]
+    del ant["results"]["summary_last_two"]
+    assert results.fig3_summary(ant) == ant["results"]["summary"]
+
+
+def test_regime_and_spread_tables_are_the_runs_of_their_files():
+    regime = raw("rl/regime_ant_cpu.json")
+    table = results.regime_table(regime)
+    assert list(table.columns) == results.REGIME_COLUMNS
+    assert table["final_return"].tolist() == [r["final_return"] for r in regime["results"]["runs"]]
+    spread = raw("rl/spread_ant_cpu.json")
+    table = results.spread_table(spread)
+    runs = spread["results"]["runs"]
+    assert table["sigma trained"].tolist() == [r["sigma_trained"] for r in runs]
+    assert table["paired t(99)"].tolist() == [r["paired_test"]["t"] for r in runs]
+
+
+def test_fig45_statistics_are_the_files_tests():
+    fig4, fig5 = raw("rl/fig4_ant_cpu.json"), raw("rl/fig5_ant_cpu.json")
+    values = results.fig45_statistics(fig4, fig5)
+    assert values["4E legs r"] == fig4["results"]["legs"]["r"]
+    assert values["4F niches p"] == fig4["results"]["niches"]["p"]
+    protocol = fig5["results"]["authors_protocol"]
+    assert values["5 authors: one-sample t"] == protocol["t"]
+    assert values["5 authors: mean network"] == protocol["mean_network_ci99"][0]
+    assert values["5 ours: paired t"] == fig5["results"]["mean_network"]["t"]
+
+
+def test_figure2_table_gives_each_setting_both_compressions_and_its_accuracy():
+    fig2 = raw("fig2_fashion-mnist_cpu.json")["results"]
+    table = results.figure2_table(fig2)
+    for model in ("dense", "sgb", "dgb"):
+        ours, theirs = fig2["ours"]["summary"][model], fig2["authors"]["summary"][model]
+        rows = table[table["model"] == model]
+        assert rows["setting"].tolist() == ours["setting"]
+        assert rows["accuracy %"].tolist() == pytest.approx([100 * m for m in ours["mean"]])
+        for _, row in rows.iterrows():
+            j = theirs["setting"].index(row["setting"])
+            assert row["compression (authors')"] == theirs["compression"][j]
+        sems = [math.nan if s is None else 100 * s for s in ours["sem"]]
+        assert rows["SEM %"].tolist() == pytest.approx(sems, nan_ok=True)
+
+
+def test_dgb_budget_table_has_one_row_per_record():
+    budget = raw("dgb_budget_fashion-mnist_cpu.json")["results"]
+    table = results.dgb_budget_table(budget)
+    assert table.index.tolist() == [r["rounds"] for r in budget["records"]]
+    assert table["its test %"].tolist() == pytest.approx(
+        [100 * r["test_accuracy"] for r in budget["records"]]
+    )
