@@ -361,24 +361,8 @@ def figure4_rows(returns: dict) -> list[Row]:
         f"{splits[0].reliability:.2f}, {splits[1].reliability:.2f})"
     )
     budget = f"{x.shape[0]} individuals x {x.shape[1]} episodes"
-    claim = "individuals' returns on normal and long legs are positively correlated"
     if attenuation > 0:
-        paper = 0.64 * attenuation
-        basis = f"0.64 as seen at these reliabilities: 0.64 x {attenuation:.2f} = {paper:.2f}"
-        return [
-            judged(
-                "fig4e.r_legs",
-                "Figure 4E",
-                claim,
-                setting,
-                "r = 0.64",
-                paper,
-                basis,
-                test,
-                budget,
-                "individuals",
-            )
-        ]
+        return [_legs_row(setting, test, attenuation, budget, "")]
     icc_high = min(s.icc_ci[1] for s in splits)
     episodes = math.ceil(episodes_for(icc_high))
     bound = max(between_sd_bound(s) for s in splits)
@@ -386,22 +370,7 @@ def figure4_rows(returns: dict) -> list[Row]:
         f"individuals that differ: at least {episodes} episodes each (ICC's upper 95 % bound "
         f"{icc_high:.3f}); the SD between individuals is below {bound:.0f}"
     )
-    basis = "0.64 attenuated by a reliability of 0: nothing observable"
-    return [
-        Row(
-            "fig4e.r_legs",
-            "Figure 4E",
-            claim,
-            setting,
-            "r = 0.64",
-            0.0,
-            basis,
-            test,
-            budget,
-            verdicts.INCONCLUSIVE,
-            decide,
-        )
-    ]
+    return [_legs_row(setting, test, attenuation, budget, decide)]
 
 
 def episodes_to_decide(per_episode, effect: float) -> str:
@@ -517,14 +486,15 @@ def populations_rows(results: dict) -> list[Row]:
             "pooled Fisher z", pooled["legs_r"]["fixed_effect"], 100 * n_genomes, math.tanh
         )
         bound = max(g["normal"].get("between_sd_bound_percent", 0.0) for g in done)
-        rows.append(_legs_row(label, r, float(np.mean(np.sqrt(rels))), budget, bound))
+        attenuation = float(np.mean(np.sqrt(rels)))
+        rows.append(_legs_row(label, r, attenuation, budget, _sd_below(bound)))
     return rows
 
 
-def _legs_row(setting: str, r: verdicts.Test, attenuation: float, budget: str, bound: float) -> Row:
+def _legs_row(setting: str, r: verdicts.Test, attenuation: float, budget: str, decide: str) -> Row:
     """Figure 4E's r against the paper's 0.64 as a measurement of ``attenuation`` (the root
     of the two bodies' reliabilities) sees it; with no reliability, an inconclusive row
-    that bounds the individuals' SD (``bound``, % of the normal body's return)."""
+    whose ``decide`` says what would tell the individuals apart."""
     claim = "individuals' returns on normal and long legs are positively correlated"
     if attenuation > 0:
         paper = 0.64 * attenuation
@@ -552,8 +522,15 @@ def _legs_row(setting: str, r: verdicts.Test, attenuation: float, budget: str, b
         r,
         budget,
         verdicts.INCONCLUSIVE,
-        f"individuals that differ: their SD is below {bound:.1f} % of "
-        "the return on the normal body",
+        decide,
+    )
+
+
+def _sd_below(bound: float) -> str:
+    """What decides Figure 4E where individuals cannot be told apart: ``bound``, the upper
+    bound on their SD in % of the normal body's return."""
+    return (
+        f"individuals that differ: their SD is below {bound:.1f} % of the return on the normal body"
     )
 
 
@@ -615,7 +592,7 @@ def regime_population_rows(results: dict) -> list[Row]:
         attenuation = math.sqrt(max(reliabilities[0], 0.0) * max(reliabilities[1], 0.0))
         bound = summary["normal"].get("between_sd_bound_percent", 0.0)
         legs = _stored_test(summary["legs"]["test"])
-        rows.append(_legs_row(label, legs, attenuation, budget, bound))
+        rows.append(_legs_row(label, legs, attenuation, budget, _sd_below(bound)))
     return rows
 
 
