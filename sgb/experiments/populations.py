@@ -475,11 +475,10 @@ def evaluate(recording: Recording, out_dir: Path) -> Path:
     plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in config.parts]
     steps = config.n_individuals * config.episodes * config.episode_length
     todo = [item for item in plan if not _has(results, item[1], item[2], env)]
-    began = time.perf_counter()
     agents: dict[str, tuple] = {}
     for k, (j, genome, part) in enumerate(todo):
         label = genome_label(genome, env)
-        eta = eta_s(time.perf_counter() - began, k * steps, (len(todo) - k) * steps)
+        eta = eta_s(time.perf_counter() - recording.began, k * steps, (len(todo) - k) * steps)
         count = plan.index((j, genome, part)) + 1
         print(f"{name} {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
         checkpoint = checkpoint_path(genome, config, env)
