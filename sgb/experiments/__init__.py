@@ -163,6 +163,17 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "not measured; needs fig3's paper checkpoint and a GPU",
         },
     ),
+    "evolution": Experiment(
+        "evolution",
+        figure="chapter 6, evolution without gradients: a stochastic genome against a "
+        "deterministic one (sigma = 0), both evolved by OpenAI-ES from innate fitness alone",
+        inputs="digits (Fashion-MNIST at paper); 2 and 8 hidden types, 5 seeds",
+        costs={
+            "smoke": "2 cells of 20 generations, seconds",
+            "cpu": "20 cells of 2000 generations, about 17 min of one CPU core; resumable",
+            "paper": "Fashion-MNIST, 64 hidden neurons, 10,000 generations; not measured",
+        },
+    ),
     "mean_gap": Experiment(
         "mean_gap",
         figure="why Fig. 2's SGB individuals beat their mean network: the moment-matched "
