@@ -163,6 +163,21 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "not measured; needs fig3's paper checkpoint and a GPU",
         },
     ),
+    "bet_hedging": Experiment(
+        "bet_hedging",
+        figure="chapter 6, bet-hedging: a genome's individuals against clones of its mean "
+        "network in a world that changes among four conditions (the abstract's 'at least "
+        "some individuals will survive')",
+        inputs="the Ant on normal, long legs, slippery and low gravity; the spread sweep's "
+        "64-type checkpoints (rho -5, -3, -1.5; the committed cpu ones at smoke and cpu)",
+        costs={
+            "smoke": "2 genomes, 50 members x 2 episodes of 50 steps; about 2 CPU-minutes, "
+            "most of it compiling",
+            "cpu": "9 genomes x 4M env-steps, about 40 min of one CPU core; resumable",
+            "paper": "15 genomes of the spread sweep's paper checkpoints, 16 episodes; not "
+            "measured",
+        },
+    ),
     "evolution": Experiment(
         "evolution",
         figure="chapter 6, evolution without gradients: a stochastic genome against a "

@@ -1,0 +1,55 @@
+"""Bet-hedging in a world that changes between generations: how a population fares when
+each generation meets one of several conditions.
+
+A population's returns are an array (C, N, E): on each of C conditions, each of N members
+plays E episodes. Generation (c, e) is every member's episode e on condition c, so the
+C x E generations visit every condition equally often, as a world that changes at random
+among them would. Two scores of a population:
+
+- its *geometric-mean fitness*: a member's fitness in a generation is its return clipped
+  at 0 over ``scale`` (a return; the mean network's on the normal body, so 1 is that
+  network at home); the population's is its members' mean, and over generations the
+  geometric mean exp(mean log W) (0 if some generation has W = 0). A lineage's long-run
+  growth follows this mean, not the arithmetic one, so a population whose fitness varies
+  less from generation to generation can grow faster at a lower average;
+- its *survival*: a member survives a generation if its return reaches ``threshold``; the
+  probability that at least k of the N survive is the share of generations in which they do.
+"""
+
+import numpy as np
+
+from sgb import validation
+
+
+def _returns(returns) -> np.ndarray:
+    array = validation.array("returns", returns, ndim=3)
+    return np.asarray(array, dtype=np.float64)
+
+
+def generation_fitness(returns, scale: float) -> np.ndarray:
+    """The population's fitness in each generation, shape (C * E,): the members' mean of
+    max(return, 0) / ``scale``, generations ordered condition by condition."""
+    r = _returns(returns)
+    validation.positive("scale", scale)
+    per_generation = np.maximum(r, 0.0).mean(axis=1) / scale  # (C, E)
+    return per_generation.reshape(-1)
+
+
+def geometric_mean_fitness(returns, scale: float) -> float:
+    """exp(mean log W) over the generations of ``generation_fitness``; 0 if some W is 0."""
+    w = generation_fitness(returns, scale)
+    if np.any(w == 0):
+        return 0.0
+    return float(np.exp(np.log(w).mean()))
+
+
+def survivors(returns, threshold: float) -> np.ndarray:
+    """How many members reach ``threshold`` in each generation, shape (C * E,)."""
+    r = _returns(returns)
+    return (r >= validation.real("threshold", threshold)).sum(axis=1).reshape(-1)
+
+
+def p_at_least(returns, threshold: float, k: int) -> float:
+    """The share of generations in which at least ``k`` members reach ``threshold``."""
+    validation.integer("k", k)
+    return float((survivors(returns, threshold) >= k).mean())
