@@ -37,6 +37,9 @@ EFFECTS = {
     "fig4f.r_terrain": "Pearson r",
     "fig5.population_beats_mean": "individuals - mean network (return)",
     "theorem.A.4": "settled sigma - sqrt(c / (H + c lambda))",
+    "ch6.evolution_stochastic_helps": "stochastic - deterministic genome, test accuracy (points)",
+    "ch6.hedging_geometric": "individuals - clones, geometric-mean fitness (mean network = 1)",
+    "ch6.hedging_survival": "individuals - clones, P(at least k of N survive)",
     "theorem": "Jensen gap E[L(w)] - L(mu)",
 }
 
@@ -596,6 +599,116 @@ def regime_population_rows(results: dict) -> list[Row]:
     return rows
 
 
+# Chapter 6: beyond the paper ---------------------------------------------------------------
+
+HEDGING_Q = "0.5"  # survival: a return of half the mean network's on the normal body
+HEDGING_K = "10"  # at least 10 of the 100 members
+
+
+def evolution_rows(results: dict) -> list[Row]:
+    """Evolution without gradients (``sgb.experiments.evolution``): per number of hidden
+    types, the stochastic genome's individuals (their mean test accuracy) against the
+    deterministic genome's network, paired by seed (both start from the same means)."""
+    records = results["records"]
+    rows = []
+    for k in sorted({r["hidden_types"] for r in records}):
+        by_seed = {
+            stochastic: {
+                r["seed"]: r
+                for r in records
+                if r["hidden_types"] == k and r["stochastic"] is stochastic
+            }
+            for stochastic in (True, False)
+        }
+        seeds = sorted(set(by_seed[True]) & set(by_seed[False]))
+        if len(seeds) < 2:
+            continue
+        stochastic = [100 * np.mean(by_seed[True][s]["individuals"]) for s in seeds]
+        deterministic = [100 * by_seed[False][s]["mean_network"] for s in seeds]
+        first = by_seed[True][seeds[0]]
+        rows.append(
+            judged(
+                "ch6.evolution_stochastic_helps",
+                "Chapter 6",
+                "stochastic development helps a genome that evolution shapes without gradients",
+                f"{results['dataset']}, {k} hidden types ({first['compression']:.0f}x)",
+                "(proposed in the Discussion, not measured)",
+                1.0,
+                "no number given: 1 point of accuracy",
+                verdicts.paired(stochastic, deterministic),
+                f"{len(first['mean_fitness'])} generations, {len(seeds)} seeds",
+                "seeds",
+            )
+        )
+    return rows
+
+
+def bet_hedging_rows(results: dict) -> list[Row]:
+    """Bet-hedging (``sgb.experiments.bet_hedging``): per initial spread, the genomes'
+    individuals against clones of their mean networks on the four conditions, by
+    geometric-mean fitness and by the chance that at least ``HEDGING_K`` of them survive
+    (a return of ``HEDGING_Q`` of the mean network's on the normal body); a one-sample t
+    over the genomes of their differences."""
+    rows = []
+    for rho in dict.fromkeys(g["rho_init"] for g in results["genomes"]):
+        genomes = [g for g in results["genomes"] if g["rho_init"] == rho]
+        if len(genomes) < 2:
+            continue
+        scores = [g["scores"] for g in genomes]
+        sigma = np.mean([g["sigma_trained"] for g in genomes])
+        setting = f"rho from {rho:g} (trained sigma {sigma:.2g})"
+        n, e = np.shape(genomes[0]["returns"]["individuals"]["normal"])
+        budget = f"{len(genomes)} genomes, {n} members x {e} episodes x 4 conditions"
+        geometric = [
+            s["individuals"]["geometric_fitness"] - s["clones"]["geometric_fitness"] for s in scores
+        ]
+        rows.append(
+            _across_genomes(
+                "ch6.hedging_geometric",
+                "variability raises a population's long-run fitness in a changing world",
+                setting,
+                0.05,
+                "no number given: 5 % of the mean network's fitness at home",
+                geometric,
+                budget,
+            )
+        )
+        survival = [
+            s["individuals"]["p_at_least"][HEDGING_Q][HEDGING_K]
+            - s["clones"]["p_at_least"][HEDGING_Q][HEDGING_K]
+            for s in scores
+        ]
+        rows.append(
+            _across_genomes(
+                "ch6.hedging_survival",
+                "variability raises the chance that at least some individuals survive",
+                setting,
+                0.1,
+                "no number given: 0.1 of probability",
+                survival,
+                budget,
+            )
+        )
+    return rows
+
+
+def _across_genomes(
+    key: str, claim: str, setting: str, effect: float, basis: str, differences, budget: str
+) -> Row:
+    """A one-sample t over the genomes of individuals - clones; not testable where every
+    genome gives the same difference (for a survival chance: both populations always, or
+    never, had enough survivors)."""
+    paper = "(the abstract's argument, not measured)"
+    if np.ptp(differences) == 0:
+        reason = f"every genome gives the same difference, {differences[0]:+.2f}: no spread to test"
+        row = untestable(key, "Chapter 6", claim, paper, reason)
+        return replace(
+            row, setting=setting, paper_effect=effect, paper_effect_basis=basis, budget=budget
+        )
+    test = verdicts.one_sample(differences, 0.0)
+    return judged(key, "Chapter 6", claim, setting, paper, effect, basis, test, budget, "genomes")
+
+
 # Theorems ---------------------------------------------------------------------------------
 
 
@@ -701,6 +814,12 @@ def scorecard(results_dir: Path) -> list[Row]:
     theory = results_dir / "theory_cpu.json"
     if theory.exists():
         rows += theorem_rows(read_results(theory)["results"])
+    evolution = results_dir / "evolution_digits_cpu.json"
+    if evolution.exists():
+        rows += evolution_rows(read_results(evolution)["results"])
+    hedging = results_dir / "rl" / "bet_hedging_ant_cpu.json"
+    if hedging.exists():
+        rows += bet_hedging_rows(read_results(hedging)["results"])
     rows += [
         untestable(
             "fig4f.r_terrain",

@@ -273,3 +273,69 @@ def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
     expected = np.array([-5.0, 5.0, 5.0])
     assert np.all(table["95 % CI low"] < expected) and np.all(expected < table["95 % CI high"])
     assert np.all(table["p"] < 1e-3) and set(table["seeds (SGB, DGB)"]) == {"4, 4"}
+
+
+def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
+    rng = np.random.default_rng(5)
+    records = []
+    for seed in range(5):
+        for k, gain in ((2, 5.0), (8, 0.0)):
+            base = 0.5 + 0.02 * rng.standard_normal()  # the seed's shared start
+            for stochastic in (True, False):
+                accuracy = base + (gain / 100 if stochastic else 0) + 0.002 * rng.standard_normal()
+                individuals = (accuracy + 0.01 * rng.standard_normal(100)).tolist()
+                records.append(
+                    {
+                        "hidden_types": k,
+                        "stochastic": stochastic,
+                        "seed": seed,
+                        "compression": 40.0 / k,
+                        "mean_fitness": [0.1] * 300,
+                        "individuals": individuals if stochastic else [accuracy] * 100,
+                        "mean_network": accuracy,
+                    }
+                )
+    helps, flat = claims.evolution_rows({"dataset": "digits", "records": records})
+    assert helps.verdict == verdicts.REPRODUCED
+    assert helps.test.estimate == pytest.approx(5.0, abs=0.5)
+    assert flat.verdict == verdicts.CONTRADICTED and flat.test.high < 1.0
+
+
+def test_bet_hedging_rows_credit_diversified_individuals_and_not_clones_of_clones():
+    """Three genomes per spread. Wide: each individual thrives on some conditions and
+    fails on others while the mean network fails everywhere but at home. Narrow: the
+    individuals are the clones, so nothing differs."""
+    from sgb.experiments import bet_hedging
+
+    rng = np.random.default_rng(4)
+    genomes = []
+    for rho, seed in ((-1.5, 0), (-1.5, 1), (-1.5, 2), (-5.0, 0), (-5.0, 1), (-5.0, 2)):
+        # the clones: good at home; on the next condition a tenth of them pass 500
+        home = np.r_[[1000.0, 372.0], np.full(2, 100.0)]
+        clones = home[:, None, None] + rng.normal(0, 20, (4, 100, 5))
+        clones[1] += rng.normal(0, 98, (100, 5))
+        if rho == -1.5:
+            niche = rng.integers(0, 4, 100)  # each individual's own good condition
+            good = niche[None, :] == np.arange(4)[:, None]
+            individuals = np.where(good, 900.0, 100.0)[:, :, None] + rng.normal(0, 20, (4, 100, 5))
+        else:
+            individuals = clones
+        scale = float(clones[0].mean())
+        genomes.append(
+            {
+                "rho_init": rho,
+                "training_seed": seed,
+                "sigma_trained": 0.2 if rho == -1.5 else 0.007,
+                "returns": {"individuals": {"normal": individuals[0].tolist()}},
+                "scores": bet_hedging.scores(individuals, clones, scale),
+            }
+        )
+    rows = claims.bet_hedging_rows(json.loads(json.dumps({"genomes": genomes})))
+    wide, narrow = rows[:2], rows[2:]
+    clones_p = [g["scores"]["clones"]["p_at_least"]["0.5"]["10"] for g in genomes[:3]]
+    assert 0.25 < min(clones_p) < max(clones_p) < 0.5  # home, and the next condition by chance
+    assert [r.key for r in wide] == ["ch6.hedging_geometric", "ch6.hedging_survival"]
+    assert [r.verdict for r in wide] == [verdicts.REPRODUCED] * 2
+    assert wide[1].test.estimate > 0.5
+    assert [r.verdict for r in narrow] == [verdicts.NOT_TESTABLE] * 2
+    assert all("+0.00" in r.decide and r.setting.startswith("rho from -5") for r in narrow)
