@@ -9,6 +9,7 @@ unchanged (returns in reward units, accuracies as fractions, times in seconds).
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from sgb.paths import committed_results
@@ -171,3 +172,48 @@ def dgb_budget_table(results: dict) -> pd.DataFrame:
         }
         for r in results["records"]
     ).set_index("rounds")
+
+
+def evolution_table(payload: Payload) -> pd.DataFrame:
+    """Evolution without gradients (``sgb.experiments.evolution``), one row per cell:
+    hidden types, compression (ours), genome, seed, the last generation's mean fitness,
+    the test accuracy of the evolved genome's individuals (their mean and SD) and of its
+    mean network, the evolved spreads' mean sigma and the wall time."""
+    return pd.DataFrame(
+        {
+            "hidden types": r["hidden_types"],
+            "compression": r["compression"],
+            "genome": "stochastic" if r["stochastic"] else "deterministic",
+            "seed": r["seed"],
+            "last fitness": r["mean_fitness"][-1],
+            "individuals": float(np.mean(r["individuals"])),
+            "SD of individuals": float(np.std(r["individuals"], ddof=1)),
+            "mean network": r["mean_network"],
+            "sigma": r["sigma_mean"],
+            "wall time (s)": r["wall_time_s"],
+        }
+        for r in payload["results"]["records"]
+    )
+
+
+def hedging_table(payload: Payload, q: str = "0.5") -> pd.DataFrame:
+    """Bet-hedging (``sgb.experiments.bet_hedging``), one row per genome and population:
+    the trained sigma, the fitness scale (the mean network's mean return at home), the
+    geometric and arithmetic mean fitness, and P(at least k survive) at threshold ``q``
+    for every k."""
+    rows = []
+    for g in payload["results"]["genomes"]:
+        for population, score in g["scores"].items():
+            rows.append(
+                {
+                    "rho start": g["rho_init"],
+                    "seed": g["training_seed"],
+                    "sigma trained": g["sigma_trained"],
+                    "population": population,
+                    "home return": g["scale"],
+                    "geometric fitness": score["geometric_fitness"],
+                    "mean fitness": score["mean_fitness"],
+                    **{f"P(>= {k} survive)": p for k, p in score["p_at_least"][q].items()},
+                }
+            )
+    return pd.DataFrame(rows)

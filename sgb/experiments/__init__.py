@@ -189,6 +189,35 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "Fashion-MNIST, 64 hidden neurons, 10,000 generations; not measured",
         },
     ),
+    "innate_start": Experiment(
+        "innate_start",
+        figure="chapter 6, innate start then learning: Ant genomes' mean network, best of 100 "
+        "and a random individual, fine-tuned with PPO on the long-legged Ant, against a fresh "
+        "network",
+        inputs="--env ant; Fig. 3's 64-type seed-0 checkpoints (ours, the authors' settings, "
+        "and rho -3 of spread; the committed cpu ones at smoke and cpu)",
+        costs={
+            "smoke": f"4 runs of 4096 steps and a selection of 8 x 2 episodes, 77 CPU-seconds "
+            f"(102 s {_SHARED})",
+            "cpu": "30 runs of 5M steps (3 genomes x 3 starts x 3 seeds, 3 fresh) and 3 "
+            "selections of 100 x 16 episodes, about 2.8 hours of one CPU core (estimated from "
+            "16,600 env-steps per CPU-second); resumable",
+            "paper": "50 runs of 5 x 10^7 steps, not measured; needs fig3's paper checkpoints "
+            "and a GPU",
+        },
+    ),
+    "innate_start_supervised": Experiment(
+        "innate_start_supervised",
+        figure="chapter 6, innate start then learning, supervised: 10 SGB individuals, their "
+        "mean network and 10 fresh networks, each fine-tuned for one epoch as a plain MLP",
+        inputs="Fashion-MNIST (digits at smoke); Fig. 2's cpu SGB at 10x, 3 seeds",
+        costs={
+            "smoke": f"16 CPU-seconds (22 s {_SHARED})",
+            "cpu": "3 seeds, about 2 minutes of one CPU core each (estimated from one epoch of "
+            "each training); resumable",
+            "paper": "the cpu design on Fig. 2's paper SGB (50 epochs), 5 seeds; not measured",
+        },
+    ),
     "mean_gap": Experiment(
         "mean_gap",
         figure="why Fig. 2's SGB individuals beat their mean network: the moment-matched "

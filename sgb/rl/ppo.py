@@ -3,12 +3,15 @@
 ``PPOConfig`` holds a run's settings; ``train`` runs it in chunks of iterations of the
 compiled step (``sgb.rl.trainer``: births, unroll, update), evaluating after each chunk,
 saving a resumable state and stopping if the loss diverges. The vanilla network is the
-special case with no sampling and no KL.
+special case with no sampling and no KL. A run starts from fresh parameters, or from a
+given actor and observation normalizer (``Start``; the critic and the optimizer still
+start fresh).
 """
 
 import time
 from dataclasses import dataclass, field, fields
 from pathlib import Path
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -21,7 +24,7 @@ from sgb.rl.agent import Individual, NetworkConfig, Params
 from sgb.rl.envs import EnvSpec
 from sgb.rl.losses import LossSettings
 from sgb.rl.normalizer import Normalizer, init_normalizer
-from sgb.rl.population import population_returns
+from sgb.rl.population import check_actor_params, check_normalizer, population_returns
 from sgb.rl.trainer import StepSettings, TrainState, make_trainer, strong
 
 REGIMES = ("ours", "authors")
@@ -109,6 +112,14 @@ class PPOConfig:
         )
 
 
+class Start(NamedTuple):
+    """Where a run starts instead of at fresh parameters: the actor's ``{"params": ...}``,
+    of the shapes of the config's network, and the observation normalizer it expects."""
+
+    actor: dict
+    normalizer: Normalizer
+
+
 @dataclass
 class TrainResult:
     """Trained parameters, observation statistics and the learning curve."""
@@ -134,13 +145,33 @@ def initial_params(config: PPOConfig, seed: int) -> Params:
     return make_trainer(config.step_settings()).agent.init(ka, kc, config.network)
 
 
-def init_state(config: PPOConfig, seed: int) -> TrainState:
-    """Initial parameters, optimizer, environments and individuals for ``seed``."""
+def _started(params: Params, initial: Start, obs_size: int) -> tuple[Params, Normalizer]:
+    """``params`` with ``initial``'s actor, and ``initial``'s normalizer, both checked: the
+    actor finite and of the shapes of ``params.actor``, the normalizer of ``obs_size``."""
+    validation.instance("initial", initial, Start)
+    actor = check_actor_params(initial.actor)
+    shapes = [jax.tree_util.tree_map(jnp.shape, p) for p in (actor, params.actor)]
+    if shapes[0] != shapes[1]:
+        raise ValueError(f"initial.actor must have the shapes {shapes[1]}, got {shapes[0]}")
+    normalizer = check_normalizer(initial.normalizer, obs_size)
+    # strong types, as the training step returns them (weak types would force a recompile)
+    actor, normalizer = jax.tree_util.tree_map(
+        lambda x: strong(jnp.asarray(x)), (actor, normalizer)
+    )
+    return params._replace(actor=actor), normalizer
+
+
+def init_state(config: PPOConfig, seed: int, initial: Start | None = None) -> TrainState:
+    """Initial parameters, optimizer, environments and individuals for ``seed``; with
+    ``initial``, its actor and normalizer in place of the fresh ones."""
     validation.instance("config", config, PPOConfig)
     trainer = make_trainer(config.step_settings())
     env = trainer.env
     key, ka, kc, kr, ki = _keys(seed)
     params = trainer.agent.init(ka, kc, config.network)
+    normalizer = init_normalizer(env.observation_size)
+    if initial is not None:
+        params, normalizer = _started(params, initial, env.observation_size)
     env_state = jax.jit(jax.vmap(env.reset))(jax.random.split(kr, config.num_envs))
     # strong types, as the training step returns them (weak types would force a recompile)
     env_state = jax.tree_util.tree_map(strong, env_state)
@@ -150,7 +181,7 @@ def init_state(config: PPOConfig, seed: int) -> TrainState:
     return TrainState(
         params=params,
         opt_state=trainer.optimizer.init(params),
-        normalizer=init_normalizer(env.observation_size),
+        normalizer=normalizer,
         env_state=env_state,
         steps=jnp.zeros(e),
         finished=jnp.zeros(e),
@@ -212,8 +243,10 @@ def train(
     progress: bool = True,
     state_file: str | Path | None = None,
     label: str = "PPO",
+    initial: Start | None = None,
 ) -> TrainResult:
     """Train with PPO; evaluates ``num_evals`` times, the last one after the final update.
+    With ``initial`` the run starts from its actor and normalizer (``init_state``).
 
     Runs ``num_evals`` chunks of ``iterations // num_evals`` iterations (so
     the steps trained are ``total_steps`` rounded down to a whole number of
@@ -229,10 +262,11 @@ def train(
     not finite, is a ``sgb.validation.CorruptFile`` naming it. ``label`` names the run on
     its progress bar. Training stops (``sgb.divergence.TrainingDiverged``) when the loss
     is not finite or its magnitude exceeds ``sgb.divergence.BLOWUP_FACTOR`` times that of
-    the first one of this call.
+    the first one of this call. A state file is known by the run's config and seed only:
+    runs from different ``initial`` starts need files of their own.
     """
     start = time.perf_counter()
-    ts = init_state(config, seed)
+    ts = init_state(config, seed, initial)
     run = {"config": repr(config), "seed": seed}
     done = {
         "chunks": 0,

@@ -1,0 +1,118 @@
+"""Chapter 6 figures: evolution without gradients (``sgb.experiments.evolution``) and
+bet-hedging (``sgb.experiments.bet_hedging``)."""
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from matplotlib.axes import Axes
+
+from sgb.plots import PALETTE, axes_or_new
+from sgb.stats import sem
+
+_GENOMES = ((True, "stochastic genome", PALETTE["sgb"]), (False, "deterministic", "#555555"))
+_POPULATIONS = (("individuals", PALETTE["individuals"]), ("clones", PALETTE["mean_network"]))
+
+
+def _cells(records: Sequence[Mapping[str, Any]], k: int, stochastic: bool) -> list:
+    return [r for r in records if r["hidden_types"] == k and r["stochastic"] is stochastic]
+
+
+def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = None) -> list:
+    """Two panels. Left: fitness (training accuracy of the candidates' individuals, %) per
+    generation, mean over seeds, for each number of hidden types and genome. Right: test
+    accuracy (%) of the evolved genome's individuals (their mean) and of the deterministic
+    genome's network, mean over seeds with SEM error bars and each seed as a dot. Returns
+    the axes."""
+    curves, bars = axes_or_new(axes, 1, 2, figsize=(10.5, 3.8))
+    records = results["records"]
+    ks = sorted({r["hidden_types"] for r in records})
+    for j, k in enumerate(ks):
+        for i, (stochastic, label, color) in enumerate(_GENOMES):
+            cells = _cells(records, k, stochastic)
+            if not cells:
+                continue
+            fitness = 100 * np.mean([c["mean_fitness"] for c in cells], axis=0)
+            style = "-" if j == len(ks) - 1 else ":"
+            curves.plot(fitness, style, color=color, lw=1.2, label=f"{label}, {k} types")
+            accuracy = [100 * np.mean(c["individuals"]) for c in cells]
+            x = j + (i - 0.5) * 0.38
+            error = sem(np.asarray(accuracy)) if len(accuracy) > 1 else 0.0
+            bars.bar(
+                x,
+                np.mean(accuracy),
+                0.36,
+                yerr=error,
+                capsize=3,
+                color=color,
+                alpha=0.75,
+                label=label if j == 0 else None,
+            )
+            bars.plot(np.full(len(accuracy), x), accuracy, "k.", ms=4)
+    curves.set_xlabel("generation")
+    curves.set_ylabel("fitness: innate training accuracy (%)")
+    curves.legend(fontsize=8)
+    compression = {r["hidden_types"]: r["compression"] for r in records}
+    bars.set_xticks(range(len(ks)), [f"{k} types\n({compression[k]:.0f}x)" for k in ks])
+    bars.set_ylabel("innate test accuracy (%)")
+    bars.legend(fontsize=8, loc="upper left")
+    return [curves, bars]
+
+
+def plot_hedging(
+    results: Mapping[str, Any], q: str = "0.5", k: str = "10", axes: Sequence[Axes] | None = None
+) -> list:
+    """Two panels, bars per initial spread: the geometric-mean fitness of the individuals
+    and of the clones (the mean network at home = 1), and the chance that at least ``k``
+    members survive (a return of ``q`` of the mean network's at home); means over the
+    spread's genomes with SEM error bars, each genome a dot. Returns the axes."""
+    fitness, survival = axes_or_new(axes, 1, 2, figsize=(10.5, 3.8))
+    genomes = results["genomes"]
+    spreads = list(dict.fromkeys(g["rho_init"] for g in genomes))
+    width = 0.8 / len(_POPULATIONS)
+    for i, (population, color) in enumerate(_POPULATIONS):
+        for j, rho in enumerate(spreads):
+            group = [g["scores"][population] for g in genomes if g["rho_init"] == rho]
+            x, label = j + (i - 0.5) * width, population if j == 0 else None
+            _bar(fitness, x, [s["geometric_fitness"] for s in group], width, color, label)
+            _bar(survival, x, [s["p_at_least"][q][k] for s in group], width, color, label)
+    sigma = {
+        rho: np.mean([g["sigma_trained"] for g in genomes if g["rho_init"] == rho])
+        for rho in spreads
+    }
+    labels = [f"$\\rho$ from {rho:g}\n($\\sigma$ {sigma[rho]:.2g})" for rho in spreads]
+    for ax in (fitness, survival):
+        ax.set_xticks(range(len(spreads)), labels)
+        ax.legend(fontsize=8)
+    fitness.set_ylabel("geometric-mean fitness")
+    fitness.axhline(1.0, color="k", lw=0.6, ls=":")
+    survival.set_ylabel(f"P(at least {k} survive)\nreturn $\\geq$ {q} x the mean network's at home")
+    survival.set_ylim(0, 1.05)
+    return [fitness, survival]
+
+
+def _bar(ax: Axes, x: float, values: list, width: float, color: str, label: str | None) -> None:
+    error = sem(np.asarray(values, dtype=float)) if len(values) > 1 else 0.0
+    ax.bar(x, np.mean(values), width, yerr=error, capsize=2, color=color, alpha=0.75, label=label)
+    ax.plot(np.full(len(values), x), values, "k.", ms=3)
+
+
+def plot_condition_returns(genome: Mapping[str, Any], ax: Axes | None = None) -> Axes:
+    """One genome: per condition, each member's mean return over its episodes, individuals
+    beside clones of the mean network (box plots). Returns ``ax``."""
+    ax = axes_or_new(ax, figsize=(6.4, 3.6))
+    conditions = list(genome["returns"]["individuals"])
+    for i, (population, color) in enumerate(_POPULATIONS):
+        data = [np.mean(genome["returns"][population][c], axis=1) for c in conditions]
+        positions = np.arange(len(conditions)) + (i - 0.5) * 0.36
+        box = ax.boxplot(
+            data, positions=positions, widths=0.32, patch_artist=True, showfliers=False
+        )
+        for patch in box["boxes"]:
+            patch.set(facecolor=color, alpha=0.6)
+        ax.plot([], [], "s", color=color, alpha=0.6, label=population)
+    ax.set_xticks(range(len(conditions)), [c.replace("_", " ") for c in conditions])
+    ax.set_ylabel("mean return of a member")
+    ax.set_title(f"$\\rho$ from {genome['rho_init']:g}, seed {genome['training_seed']}")
+    ax.legend(fontsize=8)
+    return ax
