@@ -265,3 +265,94 @@ def dgb_budget(results: dict, dense_accuracy: float) -> dict[str, str]:
         "budget_same": _percent(same["accuracy"]),
         "budget_same_epochs": str(same["epochs"]),
     }
+
+
+# Chapter 6 --------------------------------------------------------------------------------
+
+
+def evolution(payload: Payload | None) -> dict[str, str]:
+    """Evolution without gradients (``evolution_digits_cpu.json``): the design
+    (``evo_design``), per number of hidden types k the two genomes' test accuracies
+    (``evo_k{k}_stochastic``, ``evo_k{k}_deterministic``: mean +- SEM over seeds, %), the
+    evolved spreads (``evo_sigma``) and the rows of ``claims.evolution_rows``
+    (``evo_k{k}_*``); ``NOT_RUN`` for all without the file. Names for k = 2 and 8."""
+    texts = {"evo_design": NOT_RUN, "evo_sigma": NOT_RUN}
+    for k in (2, 8):
+        texts |= {f"evo_k{k}_{g}": NOT_RUN for g in ("stochastic", "deterministic")}
+        texts |= row_texts(f"evo_k{k}", None)
+    if payload is None:
+        return texts
+    records = payload["results"]["records"]
+    candidates = payload["provenance"]["config"]["base"]["candidates"]
+    texts["evo_design"] = (
+        f"{len(records[0]['mean_fitness'])} generations of {candidates} candidate genomes, "
+        f"{len({r['seed'] for r in records})} seeds"
+    )
+    sigma = [r["sigma_mean"] for r in records if r["stochastic"]]
+    texts["evo_sigma"] = f"{min(sigma):.2f} to {max(sigma):.2f}"
+    for k in (2, 8):
+        for stochastic, name in ((True, "stochastic"), (False, "deterministic")):
+            values = np.array(
+                [
+                    100 * np.mean(r["individuals"])
+                    for r in records
+                    if r["hidden_types"] == k and r["stochastic"] is stochastic
+                ]
+            )
+            if values.size > 1:
+                sem = values.std(ddof=1) / math.sqrt(values.size)
+                texts[f"evo_k{k}_{name}"] = f"{values.mean():.1f} ± {sem:.1f} %"
+    card = claims.by_key(claims.evolution_rows(payload["results"]))
+    for k in (2, 8):
+        texts |= row_texts(
+            f"evo_k{k}", _row(card, "ch6.evolution_stochastic_helps", f" {k} hidden")
+        )
+    return texts
+
+
+def bet_hedging(payload: Payload | None) -> dict[str, str]:
+    """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``) and, per
+    initial spread j (0 the narrowest: rho from -5, -3, -1.5), its trained sigma
+    (``hedge{j}_sigma``) and the rows of ``claims.bet_hedging_rows``: geometric-mean fitness
+    (``hedge{j}_geometric_*``) and survival (``hedge{j}_survival_*``); ``NOT_RUN`` for all
+    without the file."""
+    texts = {"hedge_design": NOT_RUN}
+    for j in range(3):
+        texts[f"hedge{j}_sigma"] = NOT_RUN
+        texts |= row_texts(f"hedge{j}_geometric", None) | row_texts(f"hedge{j}_survival", None)
+    if payload is None:
+        return texts
+    genomes = payload["results"]["genomes"]
+    card = claims.by_key(claims.bet_hedging_rows(payload["results"]))
+    for j, rho in enumerate(dict.fromkeys(g["rho_init"] for g in genomes)):
+        sigma = np.mean([g["sigma_trained"] for g in genomes if g["rho_init"] == rho])
+        texts[f"hedge{j}_sigma"] = f"{sigma:.2g}"
+        for kind in ("geometric", "survival"):
+            row = _row(card, f"ch6.hedging_{kind}", f"rho from {rho:g} ")
+            texts |= row_texts(f"hedge{j}_{kind}", row)
+            texts["hedge_design"] = NOT_RUN if row is None else row.budget
+    return texts
+
+
+def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, str]:
+    """Innate start, then learning: what of it is committed (``innate_status``), the Ant's
+    fine-tuning runs (``rl/innate_start_ant_cpu.json``) and the supervised twin's seeds
+    with their accuracies after one epoch (``innate_start_supervised_*_cpu.json``)."""
+    parts = []
+    if ant is None:
+        parts.append(f"the Ant runs {NOT_RUN}")
+    else:
+        runs = ant["results"]["runs"]
+        state = "complete" if ant["results"]["complete"] else "in progress"
+        parts.append(f"{len(runs)} Ant fine-tuning runs committed ({state})")
+    if supervised is None:
+        parts.append(f"the supervised twin {NOT_RUN}")
+    else:
+        summary = supervised["results"]["summary"]
+        ends = [(r["start"], 100 * r["accuracy"][-1], 100 * r["accuracy_sem"][-1]) for r in summary]
+        after = ", ".join(f"{start} {mean:.1f} ± {sem:.1f} %" for start, mean, sem in ends)
+        parts.append(
+            f"the supervised twin on {summary[0]['n_seeds']} seeds, test accuracy after one "
+            f"epoch: {after}"
+        )
+    return {"innate_status": "; ".join(parts)}

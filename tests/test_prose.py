@@ -16,6 +16,7 @@ BOOK = Path(__file__).resolve().parent.parent / "book"
 COMPUTED = {
     "04_dgb_vs_sgb": {"nominal_30_real", "nominal_1500_real"},
     "05_brax_populations": {"walk_sigma_narrow", "walk_sigma_wide", "walk_steps", "walk_episodes"},
+    "06_beyond_the_paper": set(),
 }
 
 
@@ -39,6 +40,15 @@ def chapter_texts(chapter: str, card: prose.Card) -> dict[str, str]:
         budget = results.load("dgb_budget_fashion-mnist_cpu.json")["results"]
         gap = results.load("mean_gap_fashion-mnist_cpu.json")["results"]
         return prose.figure2(fashion, card) | prose.mean_gap(gap) | prose.dgb_budget(budget, dense)
+    if chapter == "06_beyond_the_paper":
+        return (
+            prose.evolution(results.load("evolution_digits_cpu.json"))
+            | prose.bet_hedging(results.load("rl/bet_hedging_ant_cpu.json", missing_ok=True))
+            | prose.innate_start(
+                results.load("rl/innate_start_ant_cpu.json", missing_ok=True),
+                results.load("innate_start_supervised_fashion-mnist_cpu.json", missing_ok=True),
+            )
+        )
     fig3 = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
     spread = results.load("rl/spread_ant_cpu.json")["results"]["runs"]
     return (
