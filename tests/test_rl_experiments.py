@@ -133,7 +133,7 @@ def test_spread_run_trains_and_evaluates_wider_genomes(tmp_path, monkeypatch):
         ppo=shared_step_config(eval_individuals=4),
         population=population,
     )
-    monkeypatch.setattr(rl_spread, "spread_config", lambda profile: config)
+    monkeypatch.setitem(rl_spread.PROFILES, "smoke", config)
     summary = read_results(rl_spread.run("smoke", tmp_path))["results"]["summary"]
     narrow, wide = summary
     assert narrow["rho_init"] < wide["rho_init"]
