@@ -335,16 +335,24 @@ def bet_hedging(payload: Payload | None) -> dict[str, str]:
 
 
 def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, str]:
-    """Innate start, then learning: what of it is committed (``innate_status``), the Ant's
-    fine-tuning runs (``rl/innate_start_ant_cpu.json``) and the supervised twin's seeds
-    with their accuracies after one epoch (``innate_start_supervised_*_cpu.json``)."""
+    """Innate start, then learning: what of it is committed (``innate_status``); on the
+    Ant, each genome's and start's gain in learning-curve area over the fresh network
+    (``innate_rl_rows``: estimate, interval and verdict of ``claims.innate_start_rows``);
+    the supervised twin's rows (``innate_sup_individual_*``, ``innate_sup_mean_*``)."""
     parts = []
+    texts = {"innate_rl_rows": NOT_RUN}
     if ant is None:
         parts.append(f"the Ant runs {NOT_RUN}")
     else:
         runs = ant["results"]["runs"]
         state = "complete" if ant["results"]["complete"] else "in progress"
         parts.append(f"{len(runs)} Ant fine-tuning runs committed ({state})")
+        rows = claims.innate_start_rows(ant["results"])
+        if rows:
+            texts["innate_rl_rows"] = "; ".join(
+                f"{r.setting}: {r.ours}, **{r.verdict}**" for r in rows
+            )
+    card: Card = {}
     if supervised is None:
         parts.append(f"the supervised twin {NOT_RUN}")
     else:
@@ -355,4 +363,8 @@ def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, s
             f"the supervised twin on {summary[0]['n_seeds']} seeds, test accuracy after one "
             f"epoch: {after}"
         )
-    return {"innate_status": "; ".join(parts)}
+        card = claims.by_key(claims.innate_supervised_rows(supervised["results"]))
+    for start in ("individual", "mean"):
+        row = _row(card, "ch6.innate_start_supervised", f"from {start}")
+        texts |= row_texts(f"innate_sup_{start}", row)
+    return texts | {"innate_status": "; ".join(parts)}
