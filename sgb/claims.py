@@ -840,6 +840,19 @@ def sigma_law_rows(toy: dict) -> list[Row]:
 # The scorecard ----------------------------------------------------------------------------
 
 
+# results files whose rows are a function of their results alone, in scorecard order
+_READ_WHOLE = (
+    ("rl/fig5_ant_cpu.json", figure5_rows),
+    ("rl/populations_ant_cpu.json", populations_rows),
+    ("rl/regime_populations_ant_cpu.json", regime_population_rows),
+    ("theory_cpu.json", theorem_rows),
+    ("evolution_digits_cpu.json", evolution_rows),
+    ("rl/bet_hedging_ant_cpu.json", bet_hedging_rows),
+    ("rl/innate_start_ant_cpu.json", innate_start_rows),
+    ("innate_start_supervised_fashion-mnist_cpu.json", innate_supervised_rows),
+)
+
+
 def scorecard(results_dir: Path) -> list[Row]:
     """Every claim whose results are committed under ``results_dir``, then the claims no
     run here can test."""
@@ -863,30 +876,9 @@ def scorecard(results_dir: Path) -> list[Row]:
     fig4 = results_dir / "rl" / "fig4_ant_cpu.json"
     if fig4.exists():
         rows += figure4_rows(read_results(fig4)["results"]["returns"])
-    fig5 = results_dir / "rl" / "fig5_ant_cpu.json"
-    if fig5.exists():
-        rows += figure5_rows(read_results(fig5)["results"])
-    populations = results_dir / "rl" / "populations_ant_cpu.json"
-    if populations.exists():
-        rows += populations_rows(read_results(populations)["results"])
-    regime = results_dir / "rl" / "regime_populations_ant_cpu.json"
-    if regime.exists():
-        rows += regime_population_rows(read_results(regime)["results"])
-    theory = results_dir / "theory_cpu.json"
-    if theory.exists():
-        rows += theorem_rows(read_results(theory)["results"])
-    evolution = results_dir / "evolution_digits_cpu.json"
-    if evolution.exists():
-        rows += evolution_rows(read_results(evolution)["results"])
-    hedging = results_dir / "rl" / "bet_hedging_ant_cpu.json"
-    if hedging.exists():
-        rows += bet_hedging_rows(read_results(hedging)["results"])
-    innate = results_dir / "rl" / "innate_start_ant_cpu.json"
-    if innate.exists():
-        rows += innate_start_rows(read_results(innate)["results"])
-    twin = results_dir / "innate_start_supervised_fashion-mnist_cpu.json"
-    if twin.exists():
-        rows += innate_supervised_rows(read_results(twin)["results"])
+    for name, rows_of in _READ_WHOLE:
+        if (results_dir / name).exists():
+            rows += rows_of(read_results(results_dir / name)["results"])
     rows += [
         untestable(
             "fig4f.r_terrain",
