@@ -189,6 +189,14 @@ def figures4_5(card: Card) -> dict[str, str]:
 # Chapter 4 --------------------------------------------------------------------------------
 
 
+def _mean_sem(mean: float, sem: float | None, scale: float = 1.0) -> str:
+    """``mean ± sem %`` (``sem`` times ``scale``), or the mean alone where the SEM is
+    missing (``None`` or NaN: one seed)."""
+    if sem is None or math.isnan(sem):
+        return f"{mean:.1f} %"
+    return f"{mean:.1f} ± {scale * sem:.1f} %"
+
+
 def _percent(value: float) -> str:
     return f"{100 * value:.1f} %"
 
@@ -338,7 +346,8 @@ def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, s
     """Innate start, then learning: what of it is committed (``innate_status``); on the
     Ant, each genome's and start's gain in learning-curve area over the fresh network
     (``innate_rl_rows``: estimate, interval and verdict of ``claims.innate_start_rows``);
-    the supervised twin's rows (``innate_sup_individual_*``, ``innate_sup_mean_*``)."""
+    the supervised twin's rows (``innate_sup_{individual,mean}_{area,end}_*``: over the
+    epoch and after it)."""
     parts = []
     texts = {"innate_rl_rows": NOT_RUN}
     if ant is None:
@@ -357,14 +366,17 @@ def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, s
         parts.append(f"the supervised twin {NOT_RUN}")
     else:
         summary = supervised["results"]["summary"]
-        ends = [(r["start"], 100 * r["accuracy"][-1], 100 * r["accuracy_sem"][-1]) for r in summary]
-        after = ", ".join(f"{start} {mean:.1f} ± {sem:.1f} %" for start, mean, sem in ends)
+        after = ", ".join(
+            f"{r['start']} {_mean_sem(100 * r['accuracy'][-1], r['accuracy_sem'][-1], 100)}"
+            for r in summary
+        )
         parts.append(
             f"the supervised twin on {summary[0]['n_seeds']} seeds, test accuracy after one "
             f"epoch: {after}"
         )
         card = claims.by_key(claims.innate_supervised_rows(supervised["results"]))
     for start in ("individual", "mean"):
-        row = _row(card, "ch6.innate_start_supervised", f"from {start}")
-        texts |= row_texts(f"innate_sup_{start}", row)
+        for measure, name in (("over the epoch", "area"), ("after one epoch", "end")):
+            row = _row(card, "ch6.innate_start_supervised", f"from {start}, {measure}")
+            texts |= row_texts(f"innate_sup_{start}_{name}", row)
     return texts | {"innate_status": "; ".join(parts)}

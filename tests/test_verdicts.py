@@ -358,18 +358,20 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
         0.3, abs=0.03
     )
     assert random.verdict == verdicts.CONTRADICTED and "random" in random.setting
-    twin = {
-        "dataset": "digits",
-        "records": [
-            {
-                "runs": [
-                    {"start": s, "accuracy": [0.1, a + 0.01 * rng.standard_normal()]}
-                    for s, a in (("individual", 0.80), ("mean", 0.85), ("fresh", 0.70))
-                ]
-            }
-            for _ in range(4)
-        ],
-    }
-    individual, mean_network = claims.innate_supervised_rows(twin)
-    assert individual.test.estimate == pytest.approx(10.0, abs=2.5)
-    assert mean_network.verdict == verdicts.REPRODUCED and "mean" in mean_network.setting
+    starts = (("individual", 0.6, 0.8), ("mean", 0.4, 0.8), ("fresh", 0.1, 0.8))
+
+    def runs() -> list[dict]:
+        noise = 0.01 * rng.standard_normal(len(starts))  # each network's own end
+        return [
+            {"start": s, "steps": [0, 50, 100], "accuracy": [a0, a, a + e]}
+            for (s, a0, a), e in zip(starts, noise, strict=True)
+        ]
+
+    twin = {"dataset": "digits", "records": [{"runs": runs()} for _ in range(4)]}
+    rows = {r.setting: r for r in claims.innate_supervised_rows(twin)}
+    # the head start counts over the epoch (a quarter of it: 12.5 and 7.5 points), not after
+    area = rows["digits, from individual, over the epoch"].test
+    assert area.estimate == pytest.approx(12.5, abs=0.5)
+    assert rows["digits, from mean, over the epoch"].test.estimate == pytest.approx(7.5, abs=0.5)
+    assert rows["digits, from mean, over the epoch"].verdict == verdicts.REPRODUCED
+    assert rows["digits, from individual, after one epoch"].verdict == verdicts.CONTRADICTED
