@@ -321,20 +321,29 @@ def evolution(payload: Payload | None) -> dict[str, str]:
 def bet_hedging(payload: Payload | None) -> dict[str, str]:
     """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``) and, per
     initial spread j (0 the narrowest: rho from -5, -3, -1.5), its trained sigma
-    (``hedge{j}_sigma``) and the rows of ``claims.bet_hedging_rows``: geometric-mean fitness
-    (``hedge{j}_geometric_*``) and survival (``hedge{j}_survival_*``); ``NOT_RUN`` for all
-    without the file."""
+    (``hedge{j}_sigma``), both populations' mean return over conditions, members and
+    genomes (``hedge{j}_returns``) and the rows of ``claims.bet_hedging_rows``:
+    geometric-mean fitness (``hedge{j}_geometric_*``) and survival
+    (``hedge{j}_survival_*``); ``NOT_RUN`` for all without the file."""
     texts = {"hedge_design": NOT_RUN}
     for j in range(3):
-        texts[f"hedge{j}_sigma"] = NOT_RUN
+        texts[f"hedge{j}_sigma"] = texts[f"hedge{j}_returns"] = NOT_RUN
         texts |= row_texts(f"hedge{j}_geometric", None) | row_texts(f"hedge{j}_survival", None)
     if payload is None:
         return texts
     genomes = payload["results"]["genomes"]
     card = claims.by_key(claims.bet_hedging_rows(payload["results"]))
     for j, rho in enumerate(dict.fromkeys(g["rho_init"] for g in genomes)):
-        sigma = np.mean([g["sigma_trained"] for g in genomes if g["rho_init"] == rho])
-        texts[f"hedge{j}_sigma"] = f"{sigma:.2g}"
+        group = [g for g in genomes if g["rho_init"] == rho]
+        texts[f"hedge{j}_sigma"] = f"{np.mean([g['sigma_trained'] for g in group]):.2g}"
+        mean_return = {
+            p: np.mean([np.mean(list(g["returns"][p].values())) for g in group])
+            for p in ("individuals", "clones")
+        }
+        texts[f"hedge{j}_returns"] = (
+            f"{mean_return['individuals']:.0f} for the individuals, "
+            f"{mean_return['clones']:.0f} for the clones"
+        )
         for kind in ("geometric", "survival"):
             row = _row(card, f"ch6.hedging_{kind}", f"rho from {rho:g} ")
             texts |= row_texts(f"hedge{j}_{kind}", row)

@@ -116,3 +116,21 @@ def plot_condition_returns(genome: Mapping[str, Any], ax: Axes | None = None) ->
     ax.set_title(f"$\\rho$ from {genome['rho_init']:g}, seed {genome['training_seed']}")
     ax.legend(fontsize=8)
     return ax
+
+
+def plot_finetune_curves(summary: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
+    """Test accuracy (%) against fine-tuning steps, one line per start of ``summary``
+    (``sgb.experiments.innate_start_supervised.summarise``: mean over seeds, with a band
+    of +- SEM where there are several). Returns ``ax``."""
+    ax = axes_or_new(ax, figsize=(6.0, 3.6))
+    colors = {"individual": PALETTE["individuals"], "mean": PALETTE["mean_network"]}
+    for row in summary:
+        steps, mean = np.asarray(row["steps"]), 100 * np.asarray(row["accuracy"], dtype=float)
+        color = colors.get(row["start"], PALETTE["baseline"])
+        ax.plot(steps, mean, "o-", color=color, label=f"from {row['start']}")
+        band = 100 * np.asarray([np.nan if s is None else s for s in row["accuracy_sem"]])
+        ax.fill_between(steps, mean - band, mean + band, color=color, alpha=0.2)
+    ax.set_xlabel("fine-tuning steps (one epoch)")
+    ax.set_ylabel("test accuracy (%)")
+    ax.legend(fontsize=8)
+    return ax
