@@ -389,3 +389,32 @@ def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, s
             row = _row(card, "ch6.innate_start_supervised", f"from {start}, {measure}")
             texts |= row_texts(f"innate_sup_{start}_{name}", row)
     return texts | {"innate_status": "; ".join(parts)}
+
+
+def sgb_full(payload: Payload | None) -> dict[str, str]:
+    """Figure 2's SGB as the paper and the authors train it (``sgb_full_*_cpu.json``): how
+    many of its cells are committed (``full_status``), the authors' variant's individuals
+    and mean network at its lowest compression (``full_low``: mean over its seeds, %) and
+    the range of its trained hidden-layer sigma over all its cells (``full_sigma``)."""
+    texts = {"full_status": NOT_RUN, "full_low": NOT_RUN, "full_sigma": NOT_RUN}
+    if payload is None:
+        return texts
+    results = payload["results"]
+    cells = list(results["cells"].values())
+    config = payload["provenance"]["config"]
+    planned = (
+        len(config["variants"]) * len(config["sweep"]["ratios"]) * len(config["sweep"]["seeds"])
+    )
+    texts["full_status"] = f"{len(cells)} of its {planned} cells"
+    authors = [c for c in cells if c["variant"] == "authors"]
+    if authors:
+        low = min(c["compression"] for c in authors)
+        at_low = [c for c in authors if c["compression"] == low]
+        texts["full_low"] = (
+            f"{100 * np.mean([c['accuracy'] for c in at_low]):.1f} % for the individuals and "
+            f"{100 * np.mean([c['mean_network'] for c in at_low]):.1f} % for the mean network "
+            f"at {low:.0f}x ({len(at_low)} seed{'s' if len(at_low) > 1 else ''})"
+        )
+        sigma = [c["layers"][0]["mean_sigma"] for c in authors]
+        texts["full_sigma"] = f"{min(sigma):.3f} to {max(sigma):.3f}"
+    return texts

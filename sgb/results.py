@@ -217,3 +217,23 @@ def hedging_table(payload: Payload, q: str = "0.5") -> pd.DataFrame:
                 }
             )
     return pd.DataFrame(rows)
+
+
+def sgb_full_table(payload: Payload) -> pd.DataFrame:
+    """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``),
+    one row per finished cell: variant, hidden types, compression under both conventions,
+    seed, the test accuracy of the individuals (their mean) and of the mean network, and
+    the trained sigma of each layer (its synapses' mean)."""
+    return pd.DataFrame(
+        {
+            "variant": r["variant"],
+            "hidden types": r["setting"],
+            "compression (ours)": r["compression"],
+            "compression (authors')": r["compression_authors"],
+            "seed": r["seed"],
+            "individuals": r["accuracy"],
+            "mean network": r["mean_network"],
+            **{f"sigma, layer {i}": layer["mean_sigma"] for i, layer in enumerate(r["layers"])},
+        }
+        for r in payload["results"]["cells"].values()
+    ).sort_values(["variant", "compression (ours)", "seed"], ignore_index=True)

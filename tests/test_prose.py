@@ -39,7 +39,13 @@ def chapter_texts(chapter: str, card: prose.Card) -> dict[str, str]:
         dense = fashion["ours"]["summary"]["dense"]["mean"][0]
         budget = results.load("dgb_budget_fashion-mnist_cpu.json")["results"]
         gap = results.load("mean_gap_fashion-mnist_cpu.json")["results"]
-        return prose.figure2(fashion, card) | prose.mean_gap(gap) | prose.dgb_budget(budget, dense)
+        full = results.load("sgb_full_fashion-mnist_cpu.json")
+        return (
+            prose.figure2(fashion, card)
+            | prose.mean_gap(gap)
+            | prose.dgb_budget(budget, dense)
+            | prose.sgb_full(full)
+        )
     if chapter == "06_beyond_the_paper":
         return (
             prose.evolution(results.load("evolution_digits_cpu.json"))
