@@ -237,6 +237,7 @@ def finetune_run(
     began = time.perf_counter()
     ppo = config.ppo
     first = evaluate(ppo, *start_state(ppo, seed, initial), seed + START_EVAL_SEED)
+    first_s = time.perf_counter() - began
     label = f"innate start {state_file.stem}"
     result = train(ppo, seed, progress=False, state_file=state_file, label=label, initial=initial)
     steps, returns = [0, *result.eval_steps], [first, *result.eval_returns]
@@ -245,7 +246,8 @@ def finetune_run(
         "eval_returns": returns,
         **curve_scores(steps, returns, config.fractions),
         "train_steps_per_s": result.train_steps_per_s,
-        "wall_time_s": round(result.wall_time_s + time.perf_counter() - began, 2),
+        # train's own wall time counts an earlier process's part of a resumed run
+        "wall_time_s": round(result.wall_time_s + first_s, 2),
         "git_commit": git_commit(),
     }
 
