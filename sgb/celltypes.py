@@ -50,9 +50,15 @@ def expand_table(table: jnp.ndarray, shape: Sequence[int]) -> jnp.ndarray:
         raise ValueError(
             f"table has {table.ndim} axes but shape {shape} has {len(shape)}; they must match"
         )
-    out = table
     for axis, (k, n) in enumerate(zip(table.shape, shape, strict=True)):
         _check_counts(n, k, f"shape[{axis}]", f"table.shape[{axis}]")
+    return _expand(table, shape)
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _expand(table: jnp.ndarray, shape: tuple[int, ...]) -> jnp.ndarray:
+    out = table
+    for axis, n in enumerate(shape):
         out = _repeat_blocks(out, axis, n)
     return out
 
@@ -85,8 +91,13 @@ def sum_blocks(x: jnp.ndarray, types: Sequence[int]) -> jnp.ndarray:
         raise ValueError(f"types {types} must have one entry per axis of x {tuple(x.shape)}")
     for axis, (k, n) in enumerate(zip(types, x.shape, strict=True)):
         _check_counts(n, k, f"x.shape[{axis}]", f"types[{axis}]")
-    expand = functools.partial(expand_table, shape=x.shape)
-    (table,) = jax.linear_transpose(expand, jax.ShapeDtypeStruct(tuple(types), x.dtype))(x)
+    return _sum_blocks(x, tuple(types))
+
+
+@functools.partial(jax.jit, static_argnums=1)
+def _sum_blocks(x: jnp.ndarray, types: tuple[int, ...]) -> jnp.ndarray:
+    expand = functools.partial(_expand, shape=x.shape)
+    (table,) = jax.linear_transpose(expand, jax.ShapeDtypeStruct(types, x.dtype))(x)
     return table
 
 

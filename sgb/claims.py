@@ -718,6 +718,12 @@ def innate_start_rows(results: dict) -> list[Row]:
     a one-sample t over the seeds."""
     runs = results["runs"]
     fresh = {r["seed"]: r["auc"] for r in runs if r["start"] == "fresh"}
+    pool = {len(s["individual_means"]) for s in results["selections"]}
+    starts = {
+        "mean": "its mean network",
+        "best": f"the best of {'/'.join(map(str, sorted(pool)))} individuals",
+        "random": "a random individual",
+    }
     rows = []
     for genome, start in dict.fromkeys((r["genome"], r["start"]) for r in runs):
         group = [r for r in runs if (r["genome"], r["start"]) == (genome, start)]
@@ -729,7 +735,7 @@ def innate_start_rows(results: dict) -> list[Row]:
                 "ch6.innate_start_rl",
                 "Chapter 6",
                 "an innate individual is a good start for further learning",
-                f"{genome}, from its {start}",
+                f"{genome}, from {starts[start]}",
                 "(proposed in the Discussion, not measured)",
                 0.1,
                 "no number given: 10 % more return over the budget than from scratch",

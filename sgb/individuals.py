@@ -25,8 +25,12 @@ def _check(model: nn.Module, x: Any) -> jnp.ndarray:
 
 def init_params(model: nn.Module, key: jax.Array, x: jnp.ndarray) -> Params:
     """Initial ``{"params": ...}`` of ``model`` for inputs like ``x``, without sown state."""
-    x = _check(model, x)
-    init_key, sample_key = jax.random.split(validation.prng_key("key", key))
+    return _init_params(model, validation.prng_key("key", key), _check(model, x))
+
+
+@partial(jax.jit, static_argnums=0)
+def _init_params(model: nn.Module, key: jax.Array, x: jnp.ndarray) -> Params:
+    init_key, sample_key = jax.random.split(key)
     variables = model.init({"params": init_key, "sample": sample_key}, x)
     return {"params": variables["params"]}
 

@@ -2,6 +2,8 @@
 
 import io
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 from PIL import Image
@@ -10,6 +12,8 @@ from sgb.experiments import rl
 from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.rl.envs import EnvSpec
+from sgb.rl.population import _returns
+from sgb.rl.protocols import load_agent
 from sgb.rl.render import initial_pose, to_gif, walking_frames
 
 
@@ -35,12 +39,22 @@ def test_best_checkpoint_is_the_sgb_run_with_the_highest_return():
     assert len(returns) > 1  # a choice among several SGB runs
 
 
-def test_walking_frames_tile_individuals_that_move():
+def test_walking_frames_tile_individuals_that_move_and_score_them_as_the_population_does():
     checkpoint = rl.best_checkpoint(committed_results(), "ant")
-    frames = walking_frames(checkpoint, n_individuals=2, steps=6, every=3, width=64, height=48)
+    frames, returns = walking_frames(
+        checkpoint, n_individuals=2, steps=6, every=3, width=64, height=48
+    )
     assert frames.shape == (3, 48, 128, 3)
     assert all(_body_pixels(panel) > 20 for panel in (frames[0, :, :64], frames[0, :, 64:]))
     assert np.any(frames[0] != frames[-1])
+    # the population's own rollout of the same individuals from the same initial state
+    ppo, actor, normalizer = load_agent(checkpoint)
+    ind_key, reset_key = jax.random.split(jax.random.PRNGKey(0))
+    reset_keys = jnp.broadcast_to(reset_key, (2, 1, *reset_key.shape))
+    keys = jax.random.split(ind_key, 2)
+    args = (ppo.env, ppo.network.architecture, actor, normalizer, keys, reset_keys, 6, None)
+    assert returns.shape == (2,) and returns[0] != returns[1]
+    np.testing.assert_allclose(returns, np.asarray(_returns(*args))[:, 0], rtol=1e-4)
     with pytest.raises(ValueError, match="positive"):
         walking_frames(checkpoint, n_individuals=0)
 

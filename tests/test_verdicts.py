@@ -353,10 +353,12 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
             runs.append(
                 {"genome": genome, "start": start, "seed": seed, "auc": auc, "eval_steps": [0, 5e6]}
             )
-    mean, random = claims.innate_start_rows({"runs": runs})
+    selections = [{"genome": "g", "individual_means": [1000.0] * 100}]
+    mean, random = claims.innate_start_rows({"runs": runs, "selections": selections})
     assert mean.verdict == verdicts.REPRODUCED and mean.test.estimate == pytest.approx(
         0.3, abs=0.03
     )
+    assert mean.setting == "g, from its mean network"
     assert random.verdict == verdicts.CONTRADICTED and "random" in random.setting
     starts = (("individual", 0.6, 0.8), ("mean", 0.4, 0.8), ("fresh", 0.1, 0.8))
 

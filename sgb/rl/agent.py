@@ -19,7 +19,7 @@ initialise them); the forward pass is ``forward``.
 """
 
 from dataclasses import dataclass, fields
-from functools import cached_property
+from functools import cached_property, partial
 from typing import NamedTuple
 
 import flax.linen as nn
@@ -97,6 +97,12 @@ def prior_of(architecture: Architecture) -> Prior:
     return GaussianPrior(0.1) if architecture.prior == "gaussian" else ScaleMixturePrior()
 
 
+@partial(jax.jit, static_argnums=0)
+def _init_mlp(model: "MLP", key: jax.Array) -> dict:
+    dummy = jnp.zeros((1, model.in_features))
+    return {"params": model.init({"params": key, "sample": key}, dummy)["params"]}
+
+
 class MLP(nn.Module):
     """The Flax definition of a network's parameters: ``in_features`` -> hidden layers (SGB
     or dense) -> ``out`` units. Layers are named ``hidden_0``, ``hidden_1``, ... and ``out``."""
@@ -171,9 +177,7 @@ class Network:
         validation.instance("init", init, NetworkConfig)
         if init.architecture != self.architecture:
             raise ValueError(f"{init} is not a config of {self.architecture}")
-        model = MLP(init, self.out, self.in_features)
-        dummy = jnp.zeros((1, self.in_features))
-        return {"params": model.init({"params": key, "sample": key}, dummy)["params"]}
+        return _init_mlp(MLP(init, self.out, self.in_features), key)
 
     def draw(self, key: jax.Array) -> genome.Noise | None:
         """An individual's noise (``sgb.genome.draw_noise``); ``None`` for vanilla."""

@@ -61,21 +61,26 @@ def _trajectories(
     ind_keys: jax.Array,
     reset_key: jax.Array,
     steps: int,
-) -> jnp.ndarray:
-    """Joint positions (N, steps + 1, nq) of N individuals from one shared initial state."""
+) -> tuple[jnp.ndarray, jnp.ndarray]:
+    """Joint positions (N, steps + 1, nq) of N individuals from one shared initial state, and
+    their returns (N,) over the ``steps``, summed until each one's episode ends."""
     env = make_env(spec)
     agent = make_agent(architecture, env.observation_size, env.action_size)
     layers = agent.actor.layers(actor_params, jax.vmap(agent.actor.draw)(ind_keys))
     n = ind_keys.shape[0]
     state = jax.vmap(env.reset)(jnp.broadcast_to(reset_key, (n, *reset_key.shape)))
 
-    def step(state, _):
+    def step(carry, _):
+        state, total, alive = carry
         loc, _ = agent.policy(layers, normalizer, state.obs)
         state = jax.vmap(env.step)(state, jnp.tanh(loc))
-        return state, state.pipeline_state.q
+        total = total + alive * state.reward
+        alive = alive * (1.0 - state.done)
+        return (state, total, alive), state.pipeline_state.q
 
-    _, qs = jax.lax.scan(step, state, None, steps)
-    return jnp.concatenate([state.pipeline_state.q[None], qs]).swapaxes(0, 1)
+    carry = (state, jnp.zeros(n), jnp.ones(n))
+    (_, total, _), qs = jax.lax.scan(step, carry, None, steps)
+    return jnp.concatenate([state.pipeline_state.q[None], qs]).swapaxes(0, 1), total
 
 
 def walking_frames(
@@ -86,12 +91,15 @@ def walking_frames(
     seed: int = 0,
     width: int = 200,
     height: int = 200,
-) -> np.ndarray:
-    """Frames (T, height, n_individuals * width, 3) of individuals side by side.
+) -> tuple[np.ndarray, np.ndarray]:
+    """Frames (T, height, n_individuals * width, 3) of individuals side by side, and their
+    returns (n_individuals,) over the clip.
 
     The individuals are drawn from the genome of ``checkpoint`` with keys split from
     ``seed`` and start from the same initial state; each walks ``steps`` control steps
-    with deterministic actions, and every ``every``-th step is drawn.
+    with deterministic actions, and every ``every``-th step is drawn. A return sums the
+    rewards until its individual's episode ends (its torso leaves the healthy heights);
+    the clip plays on.
     """
     if n_individuals < 1 or steps < 1 or every < 1:
         raise ValueError(
@@ -101,12 +109,11 @@ def walking_frames(
     ppo, params, normalizer, _ = checkpoints.load(checkpoint)
     ind_key, reset_key = jax.random.split(jax.random.PRNGKey(seed))
     keys = jax.random.split(ind_key, n_individuals)
-    qpos = _trajectories(
+    qpos, returns = _trajectories(
         ppo.env, ppo.network.architecture, params.actor, normalizer, keys, reset_key, steps
     )
-    qpos = np.asarray(qpos)[:, ::every]
-    panels = [render_poses(ppo.env, q, width, height) for q in qpos]
-    return np.concatenate(panels, axis=2)
+    panels = [render_poses(ppo.env, q, width, height) for q in np.asarray(qpos)[:, ::every]]
+    return np.concatenate(panels, axis=2), np.asarray(returns)
 
 
 def to_gif(frames: np.ndarray, seconds_per_frame: float) -> bytes:
