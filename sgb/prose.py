@@ -13,6 +13,7 @@ import numpy as np
 
 from sgb import claims, verdicts
 from sgb.claims import Row
+from sgb.experiments.dgb_full import figure2_records
 from sgb.results import Payload
 from sgb.rl.regimes import authors_scale
 
@@ -389,6 +390,24 @@ def innate_start(ant: Payload | None, supervised: Payload | None) -> dict[str, s
             row = _row(card, "ch6.innate_start_supervised", f"from {start}, {measure}")
             texts |= row_texts(f"innate_sup_{start}_{name}", row)
     return texts | {"innate_status": "; ".join(parts)}
+
+
+def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
+    """Figure 2 at the authors' budgets: how many of the full-budget DGB's cells have
+    finished (``full_dgb_status``) and, at each of its planned ratios r, the scorecard row
+    of the SGB as the authors train it against it (``full{r}_verdict``, ``_ours``,
+    ``_detectable``, ``_decide``; ``row_texts``)."""
+    if dgb_payload is None:
+        return {"full_dgb_status": NOT_RUN}
+    config = dgb_payload["provenance"]["config"]
+    planned = len(config["ratios"]) * len(config["seeds"])
+    finished = len(figure2_records(dgb_payload["results"], config["dgb"]["rounds"]))
+    texts = {"full_dgb_status": f"{finished} of its {planned} cells"}
+    authors = claims.SGB_VARIANTS["authors"]
+    for ratio in config["ratios"]:
+        row = _row(card, "fig2.full.sgb_better_high", f"(target {ratio:g}x), the SGB ({authors})")
+        texts |= row_texts(f"full{ratio:.0f}", row)
+    return texts
 
 
 def sgb_full(payload: Payload | None) -> dict[str, str]:

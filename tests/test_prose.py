@@ -15,7 +15,7 @@ BOOK = Path(__file__).resolve().parent.parent / "book"
 # names a chapter glues from what it computes while it runs, not from results files
 COMPUTED = {
     "04_dgb_vs_sgb": {"nominal_30_real", "nominal_1500_real"},
-    "05_brax_populations": {"walk_sigma_narrow", "walk_sigma_wide", "walk_steps", "walk_episodes"},
+    "05_brax_populations": {"walk_sigma_narrow", "walk_sigma_wide", "walk_steps"},
     "06_beyond_the_paper": set(),
 }
 
@@ -45,6 +45,7 @@ def chapter_texts(chapter: str, card: prose.Card) -> dict[str, str]:
             | prose.mean_gap(gap)
             | prose.dgb_budget(budget, dense)
             | prose.sgb_full(full)
+            | prose.figure2_full(results.load("dgb_full_fashion-mnist_cpu.json"), card)
         )
     if chapter == "06_beyond_the_paper":
         return (

@@ -275,6 +275,55 @@ def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
     assert np.all(table["p"] < 1e-3) and set(table["seeds (SGB, DGB)"]) == {"4, 4"}
 
 
+def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfinished_cells():
+    """The DGB 10 points above the SGB near 200x, 10 below near 700x; a DGB cell stopped
+    short of its rounds and a ratio with one seed count for nothing."""
+    rng = np.random.default_rng(4)
+    cells = {}
+    for ratio, sgb_ratio in {200.0: 198.0, 700.0: 715.0}.items():
+        for seed in range(3):
+            cells[f"authors_{ratio}_{seed}"] = {
+                "variant": "authors",
+                "model": "sgb",
+                "setting": int(ratio),
+                "seed": seed,
+                "compression": sgb_ratio,
+                "accuracy": 0.7 - 0.4 * (ratio > 500) + 0.004 * rng.standard_normal(),
+            }
+    sgb_full = {"variants": {"authors": {}}, "cells": cells}
+
+    def dgb_cell(ratio: float, seed: int, accuracy: float, rounds: int = 500) -> dict:
+        return {
+            "ratio": ratio,
+            "seed": seed,
+            "compression_ours": ratio * 1.01,
+            "compression_authors": ratio * 1.05,
+            "nominal_ratio": ratio * 0.7,
+            "records": [{"rounds": rounds - 25, "test_accuracy": 0.0}]
+            + [{"rounds": rounds, "test_accuracy": accuracy}],
+        }
+
+    dgb = {
+        f"{r}_{s}": dgb_cell(r, s, a + 0.004 * rng.standard_normal())
+        for r, a in ((200.0, 0.80), (700.0, 0.20))
+        for s in range(3)
+    }
+    dgb["400_0"] = dgb_cell(400.0, 0, 0.5)  # one seed: no test
+    dgb["700_3"] = dgb_cell(700.0, 3, 0.9, rounds=475)  # not finished (it ran 475 of 500)
+    dgb["700_3"]["records"].pop()
+    rows = claims.figure2_full_rows(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    assert [r.setting for r in rows] == [
+        f"Fashion-MNIST, the authors' DGB layout at {d}x (target {t}x), the SGB "
+        f"(KL per synapse, rho from -7: the authors') at {s}x"
+        for d, t, s in ((202, 200, 198), (707, 700, 715))
+    ]
+    near_200, near_700 = rows
+    assert near_200.verdict == verdicts.CONTRADICTED
+    assert near_200.test.estimate == pytest.approx(-10.0, abs=1.0) and near_200.test.n == 3
+    assert near_700.verdict == verdicts.REPRODUCED
+    assert near_700.test.estimate == pytest.approx(10.0, abs=1.0)
+
+
 def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
     rng = np.random.default_rng(5)
     records = []

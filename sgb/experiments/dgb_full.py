@@ -139,3 +139,23 @@ def _write(recording: Recording, results: dict) -> Path:
     )
     seeds = sorted({cell["seed"] for cell in cells})
     return recording.write(results, seeds, parts=[c for cell in cells for c in cell["records"]])
+
+
+def figure2_records(results: dict, rounds: int) -> list[dict]:
+    """The cells that trained all ``rounds``, as Figure 2's sweep records them: ``model``
+    ("dgb"), ``setting`` (the target ratio), ``seed``, ``compression`` (ours),
+    ``compression_authors``, ``nominal_ratio`` and ``accuracy``, the test accuracy of the
+    network of best validation accuracy (a fraction)."""
+    return [
+        {
+            "model": "dgb",
+            "setting": cell["ratio"],
+            "seed": cell["seed"],
+            "compression": cell["compression_ours"],
+            "compression_authors": cell["compression_authors"],
+            "nominal_ratio": cell["nominal_ratio"],
+            "accuracy": cell["records"][-1]["test_accuracy"],
+        }
+        for cell in results["cells"].values()
+        if cell["records"] and cell["records"][-1]["rounds"] == rounds
+    ]

@@ -156,3 +156,41 @@ def plot_dgb_budget(
     )
     ax.legend(fontsize=8, loc="lower right")
     return ax
+
+
+_VARIANT_STYLE = {
+    "authors": (PALETTE["sgb"], "-", "SGB as the authors train it (KL per synapse, rho -7)"),
+    "per_pair": (PALETTE["individuals"], "--", "SGB, KL per type pair (rho -7)"),
+    "rho_ours": (PALETTE["authors"], ":", "SGB, KL per synapse, rho -5"),
+}
+
+
+def plot_full_budgets(
+    sgb_full: Mapping[str, Any],
+    dgb_records: list[dict],
+    sweep: Mapping[str, Any],
+    ax: Axes | None = None,
+) -> Axes:
+    """Figure 2 at the authors' budgets: each SGB variant of ``sgb_full`` (the results of
+    ``sgb.experiments.sgb_full``) and the finished full-budget DGB cells (``dgb_records``,
+    ``dgb_full.figure2_records``), mean innate test accuracy (%) +- SEM over seeds against
+    compression (ours); the cpu sweep's DGB and uncompressed network (``sweep``: Figure 2's
+    results) for reference."""
+    ax = axes_or_new(ax, figsize=(6.4, 4.4))
+    cells = list(sgb_full["cells"].values())
+    for variant, (color, style, label) in _VARIANT_STYLE.items():
+        records = [c for c in cells if c["variant"] == variant]
+        if records:
+            _band(ax, summarise_compression(records)["sgb"], color, label, ls=style)
+    if dgb_records:
+        _band(ax, summarise_compression(dgb_records)["dgb"], PALETTE["dgb"], "DGB, authors' layout")
+    summary = sweep["ours"]["summary"]
+    _band(ax, summary["dgb"], PALETTE["dgb"], "DGB, the cpu sweep", ls=":", alpha=0.4)
+    base = 100 * np.mean(summary["dense"]["mean"])
+    ax.axhline(base, color=PALETTE["baseline"], ls=":", label="uncompressed network")
+    _log_x(ax)
+    ax.set_xlabel(_AXES["ours"])
+    ax.set_ylabel("innate test accuracy (%)")
+    ax.set_title(f"{sgb_full['dataset']}: SGB 50 epochs, DGB 500 rounds")
+    ax.legend(fontsize=7, loc="lower left")
+    return ax
