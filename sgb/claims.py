@@ -261,21 +261,22 @@ SGB_VARIANTS = {
 }
 
 
-def crossover_row(rows: list[Row], results: dict) -> Row:
-    """The crossover exists where both sides hold: its verdict combines the rows of the two
-    sides (reproduced only if both are; contradicted if either is). Its estimate is the
-    ratio (ours) where the mean curves first cross, with the interval of
-    ``sgb.stats.bootstrap_crossing``."""
-    sides = [r for r in rows if r.key in ("fig2.dgb_better_low", "fig2.sgb_better_high")]
+def crossover_row(
+    rows: list[Row], sgb: dict, dgb: dict, setting: str, key: str = "fig2.crossover"
+) -> Row:
+    """The crossover exists where both sides hold: its verdict combines the rows of the
+    sides among ``rows`` (reproduced only if every side is; contradicted if one is). Its
+    estimate is the ratio (ours) where the mean curves of ``sgb`` and ``dgb`` (ratio ->
+    the seeds' accuracies) first cross, with the interval of ``sgb.stats.bootstrap_crossing``."""
+    sides = [r for r in rows if r.key.endswith(("dgb_better_low", "sgb_better_high"))]
     found = [r.verdict for r in sides]
     if verdicts.CONTRADICTED in found:
         verdict = verdicts.CONTRADICTED
-    elif all(v == verdicts.REPRODUCED for v in found):
+    elif found and all(v == verdicts.REPRODUCED for v in found):
         verdict = verdicts.REPRODUCED
     else:
         verdict = verdicts.INCONCLUSIVE
     decide = "" if verdict != verdicts.INCONCLUSIVE else "see the two sides' rows"
-    sgb, dgb = _accuracies(results["records"], "sgb"), _accuracies(results["records"], "dgb")
     crossing = stats.bootstrap_crossing(sgb, dgb)
     seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
     test = verdicts.Test(
@@ -289,19 +290,45 @@ def crossover_row(rows: list[Row], results: dict) -> Row:
         seeds,
     )
     return Row(
-        "fig2.crossover",
+        key,
         "Figure 2",
         "the curves cross: DGB better at low, SGB at high compression",
-        f"{sides[0].setting.split(',')[0]}, our DGB layout; "
-        f"{crossing.share_crossing:.0%} of simulated curves cross",
+        f"{setting}; {crossing.share_crossing:.0%} of simulated curves cross",
         "a crossover",
         None,
         "both sides of the crossover",
         test,
-        sides[0].budget,
+        sides[0].budget if sides else "-",
         verdict,
         decide,
     )
+
+
+def figure2_crossover(rows: list[Row], results: dict, dataset: str) -> Row:
+    """``crossover_row`` of Figure 2's cpu sweep (its ``results``) on ``dataset``."""
+    sgb, dgb = _accuracies(results["records"], "sgb"), _accuracies(results["records"], "dgb")
+    return crossover_row(rows, sgb, dgb, f"{dataset}, our DGB layout")
+
+
+def figure2_full_crossover(
+    rows: list[Row], sgb_full: dict, dgb_full: dict, rounds: int, dataset: str
+) -> Row | None:
+    """``crossover_row`` at the authors' budgets (the results of ``sgb.experiments.
+    sgb_full`` and ``dgb_full``), for the SGB as the authors train it, over the ratios
+    where at least 2 seeds finished; ``None`` before two DGB ratios have. Its one side is
+    the row of the highest ratio among ``rows`` (``figure2_full_rows``): a crossing inside
+    Figure 2's range needs the SGB above the DGB there (the low side, the DGB above the SGB,
+    is the row ``fig2.dgb_better_low``)."""
+    cells = [c for c in sgb_full["cells"].values() if c["variant"] == "authors"]
+    sgb = {r: a for r, a in _accuracies(cells, "sgb").items() if a.size > 1}
+    dgb_records = figure2_records(dgb_full, rounds)
+    dgb = {r: a for r, a in _accuracies(dgb_records, "dgb").items() if a.size > 1}
+    if len(dgb) < 2 or len(sgb) < 2:
+        return None
+    authors = SGB_VARIANTS["authors"]
+    sides = [r for r in rows if f"the SGB ({authors})" in r.setting][-1:]
+    setting = f"{dataset}, the authors' DGB layout, the SGB ({authors})"
+    return crossover_row(sides, sgb, dgb, setting, "fig2.full.crossover")
 
 
 # Figure 3 ---------------------------------------------------------------------------------
@@ -928,14 +955,18 @@ def scorecard(results_dir: Path) -> list[Row]:
     fig2 = results_dir / "fig2_fashion-mnist_cpu.json"
     if fig2.exists():
         f2 = figure2_rows(read_results(fig2)["results"], "Fashion-MNIST")
-        rows += f2 + [crossover_row(f2, read_results(fig2)["results"])]
+        rows += f2 + [figure2_crossover(f2, read_results(fig2)["results"], "Fashion-MNIST")]
     sgb_full = results_dir / "sgb_full_fashion-mnist_cpu.json"
     dgb_full = results_dir / "dgb_full_fashion-mnist_cpu.json"
     if sgb_full.exists() and dgb_full.exists():
         dgb_payload = read_results(dgb_full)
         rounds = dgb_payload["provenance"]["config"]["dgb"]["rounds"]
         sgb_results = read_results(sgb_full)["results"]
-        rows += figure2_full_rows(sgb_results, dgb_payload["results"], rounds, "Fashion-MNIST")
+        full = figure2_full_rows(sgb_results, dgb_payload["results"], rounds, "Fashion-MNIST")
+        cross = figure2_full_crossover(
+            full, sgb_results, dgb_payload["results"], rounds, "Fashion-MNIST"
+        )
+        rows += full + ([cross] if cross else [])
     for env in ("ant", "halfcheetah"):
         path = results_dir / "rl" / f"fig3_{env}_cpu.json"
         if path.exists():

@@ -396,7 +396,7 @@ def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
     """Figure 2 at the authors' budgets: how many of the full-budget DGB's cells have
     finished (``full_dgb_status``) and, at each of its planned ratios r, the scorecard row
     of the SGB as the authors train it against it (``full{r}_verdict``, ``_ours``,
-    ``_detectable``, ``_decide``; ``row_texts``)."""
+    ``_detectable``, ``_decide``; ``row_texts``), and the crossover's row (``full_cross``)."""
     if dgb_payload is None:
         return {"full_dgb_status": NOT_RUN}
     config = dgb_payload["provenance"]["config"]
@@ -407,7 +407,7 @@ def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
     for ratio in config["ratios"]:
         row = _row(card, "fig2.full.sgb_better_high", f"(target {ratio:g}x), the SGB ({authors})")
         texts |= row_texts(f"full{ratio:.0f}", row)
-    return texts
+    return texts | row_texts("full_cross", _row(card, "fig2.full.crossover"))
 
 
 def sgb_full(payload: Payload | None) -> dict[str, str]:

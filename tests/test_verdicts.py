@@ -322,6 +322,12 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     assert near_200.test.estimate == pytest.approx(-10.0, abs=1.0) and near_200.test.n == 3
     assert near_700.verdict == verdicts.REPRODUCED
     assert near_700.test.estimate == pytest.approx(10.0, abs=1.0)
+    # the curves cross where the 10-point lead changes hands, halfway in log(ratio)
+    cross = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    assert cross.key == "fig2.full.crossover" and cross.verdict == verdicts.REPRODUCED
+    assert 300 < cross.test.low < cross.test.estimate < cross.test.high < 500
+    behind = claims.figure2_full_crossover(rows[:1], sgb_full, {"cells": dgb}, 500, "x")
+    assert behind.verdict == verdicts.CONTRADICTED  # the highest ratio's row decides
 
 
 def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
