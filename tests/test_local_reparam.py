@@ -50,7 +50,7 @@ def test_local_preactivations_have_the_exact_mean_and_variance():
     def draw(key):
         return layer.apply(params, x, rngs={"sample": key}, local_reparam=True)
 
-    y = np.asarray(jax.vmap(draw)(KEYS))
+    y = np.asarray(jax.jit(jax.vmap(draw))(KEYS))
     n = len(KEYS)
     assert np.all(np.abs(y.mean(0) - mean) < 4 * np.sqrt(var / n))
     # the sample variance of n normals has standard error var * sqrt(2 / (n - 1))
@@ -75,7 +75,7 @@ def test_both_estimators_give_the_same_expected_loss_of_a_two_layer_network():
             logits = model.apply(params, x, rngs={"sample": key}, local_reparam=local)
             return cross_entropy(logits, labels)
 
-        values = np.asarray(jax.vmap(one)(KEYS))
+        values = np.asarray(jax.jit(jax.vmap(one))(KEYS))
         return values.mean(), values.std(ddof=1) / np.sqrt(len(values))
 
     (shared, se_shared), (local, se_local) = losses(False), losses(True)
@@ -101,7 +101,7 @@ def test_local_kl_estimates_the_same_kl(prior, counting):
             )
             return sown_kl(state)
 
-        values = np.asarray(jax.vmap(one)(KEYS))
+        values = np.asarray(jax.jit(jax.vmap(one))(KEYS))
         return values.mean(), values.std(ddof=1) / np.sqrt(len(values))
 
     (shared, se_shared), (local, se_local) = kl(False), kl(True)

@@ -5,8 +5,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from sgb.rl.agent import NetworkConfig, make_agent, tanh_gaussian_log_prob
-from sgb.rl.losses import LossSettings, Unroll, gae, masked_mean, ppo_loss
+from sgb.rl.losses import LossSettings, Unroll, gae, masked_mean
+from sgb.rl.losses import ppo_loss as eager_ppo_loss
 from sgb.rl.normalizer import init_normalizer, update
+
+# the loss as training runs it, compiled whole (op by op it takes seconds a call)
+ppo_loss = jax.jit(eager_ppo_loss, static_argnums=(4, 5))
 
 SETTINGS = LossSettings(
     clip=0.3,
@@ -71,7 +75,7 @@ def _setup():
     params = agent.init(jax.random.PRNGKey(0), jax.random.PRNGKey(1), network)
     obs = jax.random.normal(jax.random.PRNGKey(2), (50, 3)) * 2.0 + 1.0
     normalizer = update(init_normalizer(3), obs, jnp.ones(50))
-    data = _unroll_by(agent, params, normalizer, jax.random.PRNGKey(3))
+    data = jax.jit(_unroll_by, static_argnums=0)(agent, params, normalizer, jax.random.PRNGKey(3))
     return agent, params, normalizer, data
 
 
@@ -118,7 +122,9 @@ def test_at_ratio_one_the_ppo_gradient_is_the_policy_gradient():
     -mean(A * log pi(a|s)) with the normalised advantages held fixed."""
     agent, params, normalizer, data = _setup()
     key = jax.random.PRNGKey(4)
-    ours = jax.grad(lambda p: ppo_loss(p, data, normalizer, key, agent, POLICY_ONLY)[0])(params)
+    ours = jax.jit(jax.grad(lambda p: ppo_loss(p, data, normalizer, key, agent, POLICY_ONLY)[0]))(
+        params
+    )
     adv = _normalised_advantages(agent, params, normalizer, data)
 
     def surrogate(actor_params):
@@ -126,7 +132,7 @@ def test_at_ratio_one_the_ppo_gradient_is_the_policy_gradient():
         loc, scale = agent.policy(actor, normalizer, data.obs)
         return -masked_mean(adv * tanh_gaussian_log_prob(data.u, loc, scale), data.valid)
 
-    reference = jax.grad(surrogate)(params.actor)
+    reference = jax.jit(jax.grad(surrogate))(params.actor)
     leaves = zip(
         jax.tree_util.tree_leaves(ours.actor), jax.tree_util.tree_leaves(reference), strict=True
     )

@@ -265,8 +265,8 @@ def test_the_agents_kl_is_the_flax_layers_kl(prior):
         return sum(genome.sown(state["losses"], "kl").values())
 
     many = jax.random.split(jax.random.PRNGKey(3), 2000)
-    ours = jax.vmap(lambda k: actor.kl(params, k))(many)
-    theirs = jax.vmap(layers_kl)(many)
+    ours = jax.jit(jax.vmap(lambda k: actor.kl(params, k)))(many)
+    theirs = jax.jit(jax.vmap(layers_kl))(many)
     if prior == "gaussian":
         np.testing.assert_allclose(ours, theirs, rtol=1e-5)
     else:
