@@ -407,7 +407,29 @@ def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
     for ratio in config["ratios"]:
         row = _row(card, "fig2.full.sgb_better_high", f"(target {ratio:g}x), the SGB ({authors})")
         texts |= row_texts(f"full{ratio:.0f}", row)
+    for variant in claims.SGB_VARIANTS:
+        rows = [
+            r
+            for r in card.get("fig2.full.sgb_better_high", [])
+            if f"the SGB ({claims.SGB_VARIANTS[variant]})" in r.setting
+        ]
+        texts[f"full_lead_{variant}"] = _leads(rows)
     return texts | row_texts("full_cross", _row(card, "fig2.full.crossover"))
+
+
+def _leads(rows: list[Row]) -> str:
+    """Which side leads in ``rows`` (SGB minus DGB, points), in words."""
+    if not rows:
+        return NOT_RUN
+    estimates = [r.test.estimate for r in rows]
+    behind = [-e for e in estimates if e < 0]
+    ahead = [e for e in estimates if e >= 0]
+    parts = []
+    for count, gaps, where in ((len(behind), behind, "below"), (len(ahead), ahead, "above")):
+        if count:
+            span = f"{gaps[0]:.1f}" if count == 1 else f"{min(gaps):.1f} to {max(gaps):.1f}"
+            parts.append(f"{where} the DGB at {count} of {len(rows)} ratios (by {span} points)")
+    return "; ".join(parts)
 
 
 def sgb_full(payload: Payload | None) -> dict[str, str]:
