@@ -6,6 +6,7 @@ import math
 import pytest
 
 from sgb import results
+from sgb.experiments import dgb_full
 from sgb.paths import committed_results
 
 
@@ -117,3 +118,20 @@ def test_dgb_budget_table_has_one_row_per_record():
     assert table["its test %"].tolist() == pytest.approx(
         [100 * r["test_accuracy"] for r in budget["records"]]
     )
+
+
+def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
+    """Every cell is a row of the table; the finished ones (all the configured rounds) are
+    Figure 2 records, with the table's accuracy, compression and nominal ratio."""
+    payload = raw("dgb_full_fashion-mnist_cpu.json")
+    table = results.dgb_full_table(payload)
+    assert len(table) == len(payload["results"]["cells"])
+    rounds = payload["provenance"]["config"]["dgb"]["rounds"]
+    finished = table[table["rounds"] == rounds].set_index(["target ratio", "seed"])
+    records = dgb_full.figure2_records(payload["results"], rounds)
+    assert len(records) == len(finished) > 0
+    for r in records:
+        row = finished.loc[(r["setting"], r["seed"])]
+        assert r["accuracy"] == row["test accuracy"]
+        assert r["compression"] == row["compression (ours)"]
+        assert r["nominal_ratio"] == row["nominal ratio (paper's axis)"]
