@@ -328,6 +328,10 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     assert 300 < cross.test.low < cross.test.estimate < cross.test.high < 500
     behind = claims.figure2_full_crossover(rows[:1], sgb_full, {"cells": dgb}, 500, "x")
     assert behind.verdict == verdicts.CONTRADICTED  # the highest ratio's row decides
+    for name, cell in dgb.items():  # the DGB far above the SGB at every ratio
+        cell["records"][-1]["test_accuracy"] += 0.5 * name.startswith("700")
+    apart = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "x")
+    assert apart.test is None and "0% of simulated curves cross" in apart.setting
 
 
 def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
