@@ -229,7 +229,10 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
     (its name as the book prints it)."""
     dgb_records = figure2_records(dgb_full, rounds)
     dgb = {r: a for r, a in _accuracies(dgb_records, "dgb").items() if a.size > 1}
-    targets = {r: next(c["setting"] for c in dgb_records if c["compression"] == r) for r in dgb}
+    targets = {  # each ratio's key as _accuracies computes it, to its target ratio
+        float(np.mean([c["compression"] for c in dgb_records if c["setting"] == s])): s
+        for s in {c["setting"] for c in dgb_records}
+    }
     rows = []
     for variant in sgb_full["variants"]:
         records = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
