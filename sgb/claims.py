@@ -30,6 +30,8 @@ EFFECTS = {
     "fig2.sgb_better_high": "SGB - DGB accuracy (points)",
     "fig2.sgb_declines_slowly": "DGB's decline - SGB's (points)",
     "fig2.crossover": "compression (ours) where the curves first cross",
+    "fig2.full.sgb_better_high": "SGB - DGB accuracy (points)",
+    "fig2.full.crossover": "compression (ours) where the curves first cross",
     "fig2.cifar": "-",
     "fig3.level_128": "1 - fraction of vanilla at 128 types",
     "fig3.fall_16": "fraction of vanilla, 128 - 16 types",

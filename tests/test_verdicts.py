@@ -147,6 +147,7 @@ def test_the_committed_scorecard_gives_every_claim_one_verdict():
     assert {r.verdict for r in rows} <= set(verdicts.VERDICTS)
     keys = {r.key.split(".")[0] + "." + r.key.split(".")[1] for r in rows}
     assert {"fig2.sgb_better_high", "fig4e.r_legs", "fig5.population_beats_mean"} <= keys
+    assert len(claims.table(rows)) == len(rows)  # every row names what it tests
     for r in rows:
         if r.verdict == verdicts.INCONCLUSIVE:
             assert r.decide  # the budget that would decide is named
