@@ -119,8 +119,9 @@ def untestable(key: str, figure: str, claim: str, paper: str, reason: str) -> Ro
 # Figure 2 ---------------------------------------------------------------------------------
 
 
-def _accuracies(records: list[dict], model: str) -> dict[float, np.ndarray]:
-    """Per setting of ``model`` (keyed by its compression, ours), the seeds' accuracies."""
+def _accuracies(records: list[dict], model: str, min_seeds: int = 1) -> dict[float, np.ndarray]:
+    """Per setting of ``model`` (keyed by its compression, ours) run at ``min_seeds`` seeds
+    or more, the seeds' accuracies."""
     by_setting: dict[int, list[dict]] = {}
     for r in records:
         if r["model"] == model:
@@ -128,6 +129,7 @@ def _accuracies(records: list[dict], model: str) -> dict[float, np.ndarray]:
     return {
         float(np.mean([r["compression"] for r in rs])): np.array([r["accuracy"] for r in rs])
         for rs in by_setting.values()
+        if len(rs) >= min_seeds
     }
 
 
@@ -230,7 +232,7 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
     accuracy points. ``sgb_full``/``dgb_full``: the results of the two sweeps on ``dataset``
     (its name as the book prints it)."""
     dgb_records = figure2_records(dgb_full, rounds)
-    dgb = {r: a for r, a in _accuracies(dgb_records, "dgb").items() if a.size > 1}
+    dgb = _accuracies(dgb_records, "dgb", min_seeds=2)
     targets = {  # each ratio's key as _accuracies computes it, to its target ratio
         float(np.mean([c["compression"] for c in dgb_records if c["setting"] == s])): s
         for s in {c["setting"] for c in dgb_records}
@@ -238,7 +240,7 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
     rows = []
     for variant in sgb_full["variants"]:
         records = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
-        sgb = {r: a for r, a in _accuracies(records, "sgb").items() if a.size > 1}
+        sgb = _accuracies(records, "sgb", min_seeds=2)
         for ratio_s, ratio_d in nearest_pairs(sgb, dgb):
             test = verdicts.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
             rows.append(
@@ -328,9 +330,9 @@ def figure2_full_crossover(
     Figure 2's range needs the SGB above the DGB there (the low side, the DGB above the SGB,
     is the row ``fig2.dgb_better_low``)."""
     cells = [c for c in sgb_full["cells"].values() if c["variant"] == "authors"]
-    sgb = {r: a for r, a in _accuracies(cells, "sgb").items() if a.size > 1}
+    sgb = _accuracies(cells, "sgb", min_seeds=2)
     dgb_records = figure2_records(dgb_full, rounds)
-    dgb = {r: a for r, a in _accuracies(dgb_records, "dgb").items() if a.size > 1}
+    dgb = _accuracies(dgb_records, "dgb", min_seeds=2)
     if len(dgb) < 2 or len(sgb) < 2:
         return None
     authors = SGB_VARIANTS["authors"]
