@@ -198,27 +198,48 @@ def nearest_pairs(sgb: dict[float, np.ndarray], dgb: dict[float, np.ndarray]) ->
     return [(min(sgb, key=lambda r, d=d: abs(math.log(r / d))), d) for d in sorted(dgb) if sgb]
 
 
+def _welch_table(a: dict, b: dict, pairs: list, names: tuple[str, str]) -> pd.DataFrame:
+    """``names[0]`` minus ``names[1]`` accuracy (points) for every (ratio of ``a``, ratio of
+    ``b``) in ``pairs`` (ratio -> the seeds' accuracies), with Welch's test: its 95 %
+    interval, p, the difference detectable at 80 % power and the seeds of each; indexed by
+    ``a``'s ratio (ours, rounded)."""
+    columns = [
+        "compression (ours)",
+        f"{names[0]} - {names[1]} (points)",
+        "95 % CI low",
+        "95 % CI high",
+        "p",
+        "detectable at 80 % power",
+        f"seeds ({names[0]}, {names[1]})",
+    ]
+    rows = []
+    for ratio_a, ratio_b in pairs:
+        test = verdicts.welch(100 * a[ratio_a], 100 * b[ratio_b])
+        seeds = f"{a[ratio_a].size}, {b[ratio_b].size}"
+        row = [test.estimate, test.low, test.high, test.p, test.detectable]
+        rows.append([round(ratio_a), *row, seeds])
+    return pd.DataFrame(rows, columns=columns).set_index(columns[0])
+
+
 def figure2_ratio_tests(results: dict) -> pd.DataFrame:
-    """SGB minus DGB accuracy (points) at every ratio the DGB ran, against the SGB at the
-    nearest ratio, with Welch's test: its 95 % interval, p, the difference detectable at
-    80 % power and the seeds of each."""
+    """SGB minus DGB (``_welch_table``) at every ratio the DGB ran, against the SGB at the
+    nearest ratio."""
     sgb = _accuracies(results["records"], "sgb")
     dgb = _accuracies(results["records"], "dgb")
-    rows = []
-    for ratio_s, ratio_d in nearest_pairs(sgb, dgb):
-        test = verdicts.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
-        rows.append(
-            {
-                "compression (ours)": round(ratio_s),
-                "SGB - DGB (points)": test.estimate,
-                "95 % CI low": test.low,
-                "95 % CI high": test.high,
-                "p": test.p,
-                "detectable at 80 % power": test.detectable,
-                "seeds (SGB, DGB)": f"{sgb[ratio_s].size}, {dgb[ratio_d].size}",
-            }
-        )
-    return pd.DataFrame(rows).set_index("compression (ours)")
+    return _welch_table(sgb, dgb, nearest_pairs(sgb, dgb), ("SGB", "DGB"))
+
+
+def sgb_variant_tests(sgb_full: dict, variant: str, baseline: str = "authors") -> pd.DataFrame:
+    """How much one change of the SGB's training moves Figure 2: the individuals of
+    ``variant`` minus those of ``baseline`` (``_welch_table``; variants of ``sgb.experiments.
+    sgb_full``, whose results are ``sgb_full``) at every ratio where both have 2 seeds or more."""
+    cells = sgb_full["cells"].values()
+    of = {
+        name: _accuracies([c for c in cells if c["variant"] == name], "sgb", min_seeds=2)
+        for name in (variant, baseline)
+    }
+    pairs = [(v, b) for b, v in nearest_pairs(of[baseline], of[variant])]
+    return _welch_table(of[variant], of[baseline], pairs, (variant, baseline))
 
 
 FULL_BUDGET = "SGB 50 epochs, 3 draws a minibatch; DGB 500 rounds, best validation"

@@ -432,12 +432,38 @@ def _leads(rows: list[Row]) -> str:
     return "; ".join(parts)
 
 
+def _excluding_zero(table) -> int:
+    """How many rows of a ``claims.sgb_variant_tests`` table have a 95 % interval without 0."""
+    return int(((table["95 % CI low"] > 0) | (table["95 % CI high"] < 0)).sum())
+
+
+def _variant_shift(table) -> str:
+    """A ``claims.sgb_variant_tests`` table in words: the range of its differences, how many
+    of its 95 % intervals exclude 0, and the largest difference detectable at 80 % power."""
+    if table.empty:
+        return NOT_RUN
+    shift = table.iloc[:, 0]
+    apart = _excluding_zero(table)
+    return (
+        f"{shift.min():+.1f} to {shift.max():+.1f} points over {len(table)} ratio"
+        f"{'s' if len(table) > 1 else ''} ({apart} of whose 95 % intervals exclude 0; "
+        f"at 80 % power a difference of {table['detectable at 80 % power'].max():.1f} points "
+        "is detected at each)"
+    )
+
+
 def sgb_full(payload: Payload | None) -> dict[str, str]:
     """Figure 2's SGB as the paper and the authors train it (``sgb_full_*_cpu.json``): how
     many of its cells are committed (``full_status``), the authors' variant's individuals
-    and mean network at its lowest compression (``full_low``: mean over its seeds, %) and
-    the range of its trained hidden-layer sigma over all its cells (``full_sigma``)."""
-    texts = {"full_status": NOT_RUN, "full_low": NOT_RUN, "full_sigma": NOT_RUN}
+    and mean network at its lowest compression (``full_low``: mean over its seeds, %), the
+    range of the trained hidden-layer sigma over all cells of the authors' variant
+    (``full_sigma``) and of our rho start (``full_rho_sigma``), and how far the individuals
+    of the KL per type pair (``full_pair_shift``) and of our rho start (``full_rho_shift``)
+    lie from the authors' (``claims.sgb_variant_tests``), and at how many ratios the rho
+    start makes a difference whose 95 % interval excludes 0 (``full_rho_conclusion``)."""
+    names = ("full_status", "full_low", "full_sigma", "full_rho_sigma")
+    shifts = ("full_pair_shift", "full_rho_shift", "full_rho_conclusion")
+    texts = dict.fromkeys(names + shifts, NOT_RUN)
     if payload is None:
         return texts
     results = payload["results"]
@@ -447,6 +473,10 @@ def sgb_full(payload: Payload | None) -> dict[str, str]:
         len(config["variants"]) * len(config["sweep"]["ratios"]) * len(config["sweep"]["seeds"])
     )
     texts["full_status"] = f"{len(cells)} of its {planned} cells"
+    for variant, name in (("authors", "full_sigma"), ("rho_ours", "full_rho_sigma")):
+        sigma = [c["layers"][0]["mean_sigma"] for c in cells if c["variant"] == variant]
+        if sigma:
+            texts[name] = f"{min(sigma):.3f} to {max(sigma):.3f}"
     authors = [c for c in cells if c["variant"] == "authors"]
     if authors:
         low = min(c["compression"] for c in authors)
@@ -456,6 +486,12 @@ def sgb_full(payload: Payload | None) -> dict[str, str]:
             f"{100 * np.mean([c['mean_network'] for c in at_low]):.1f} % for the mean network "
             f"at {low:.0f}x ({len(at_low)} seed{'s' if len(at_low) > 1 else ''})"
         )
-        sigma = [c["layers"][0]["mean_sigma"] for c in authors]
-        texts["full_sigma"] = f"{min(sigma):.3f} to {max(sigma):.3f}"
+    pair, rho = (claims.sgb_variant_tests(results, v) for v in ("per_pair", "rho_ours"))
+    texts["full_pair_shift"], texts["full_rho_shift"] = _variant_shift(pair), _variant_shift(rho)
+    if not rho.empty:
+        apart = _excluding_zero(rho)
+        texts["full_rho_conclusion"] = (
+            f"moves the individuals' accuracy measurably at {apart or 'none'} of the "
+            f"{len(rho)} ratio{'s' if len(rho) > 1 else ''}"
+        )
     return texts

@@ -241,19 +241,27 @@ def dgb_full_table(payload: Payload) -> pd.DataFrame:
 
 def sgb_full_table(payload: Payload) -> pd.DataFrame:
     """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``),
-    one row per finished cell: variant, hidden types, compression under both conventions,
-    seed, the test accuracy of the individuals (their mean) and of the mean network, and
-    the trained sigma of each layer (its synapses' mean)."""
-    return pd.DataFrame(
+    one row per variant and number of hidden types, over the seeds finished: compression
+    under both conventions, the seeds, the test accuracy of the individuals (mean over
+    seeds of each seed's mean, and its SD over seeds) and of the mean network, and the
+    trained sigma of each layer (its synapses' mean, mean over seeds)."""
+    cells = pd.DataFrame(
         {
             "variant": r["variant"],
             "hidden types": r["setting"],
             "compression (ours)": r["compression"],
             "compression (authors')": r["compression_authors"],
-            "seed": r["seed"],
+            "seeds": r["seed"],
             "individuals": r["accuracy"],
+            "individuals (SD)": r["accuracy"],
             "mean network": r["mean_network"],
             **{f"sigma, layer {i}": layer["mean_sigma"] for i, layer in enumerate(r["layers"])},
         }
         for r in payload["results"]["cells"].values()
-    ).sort_values(["variant", "compression (ours)", "seed"], ignore_index=True)
+    )
+    how = {c: "mean" for c in cells.columns[2:]} | {"seeds": "count", "individuals (SD)": "std"}
+    return (
+        cells.groupby(["variant", "hidden types"])
+        .agg(how)
+        .sort_values(["variant", "compression (ours)"])
+    )

@@ -135,3 +135,17 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
         assert r["accuracy"] == row["test accuracy"]
         assert r["compression"] == row["compression (ours)"]
         assert r["nominal_ratio"] == row["nominal ratio (paper's axis)"]
+
+
+def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():
+    payload = raw("sgb_full_fashion-mnist_cpu.json")
+    table = results.sgb_full_table(payload)
+    cells = list(payload["results"]["cells"].values())
+    assert table["seeds"].sum() == len(cells)
+    for (variant, hidden), row in table.iterrows():
+        mine = [c for c in cells if c["variant"] == variant and c["setting"] == hidden]
+        assert row["seeds"] == len(mine)
+        assert row["individuals"] == pytest.approx(sum(c["accuracy"] for c in mine) / len(mine))
+        assert row["sigma, layer 0"] == pytest.approx(
+            sum(c["layers"][0]["mean_sigma"] for c in mine) / len(mine)
+        )

@@ -276,6 +276,33 @@ def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
     assert np.all(table["p"] < 1e-3) and set(table["seeds (SGB, DGB)"]) == {"4, 4"}
 
 
+def test_sgb_variant_tests_find_a_known_shift_and_skip_ratios_without_two_seeds():
+    """A variant 3 points above the authors' at 10x and level at 400x; its 700x cell has
+    one seed, so that ratio has no test."""
+    rng = np.random.default_rng(5)
+    shifts = {"authors": {10.0: 0.0, 400.0: 0.0, 700.0: 0.0}, "rho_ours": {10.0: 0.03, 400.0: 0.0}}
+    cells = {
+        f"{variant}_{ratio}_{seed}": {
+            "variant": variant,
+            "model": "sgb",
+            "setting": int(ratio),
+            "seed": seed,
+            "compression": ratio,
+            "accuracy": 0.7 + shift + 0.002 * rng.standard_normal(),
+        }
+        for variant, by_ratio in shifts.items()
+        for ratio, shift in by_ratio.items()
+        for seed in range(4)
+    }
+    cells["rho_ours_700.0_0"] = {**cells["authors_700.0_0"], "variant": "rho_ours"}
+    table = claims.sgb_variant_tests({"cells": cells}, "rho_ours")
+    assert list(table.index) == [10, 400]
+    assert np.all(table["95 % CI low"] < [3.0, 0.0]) and np.all([3.0, 0.0] < table["95 % CI high"])
+    assert table["p"].iloc[0] < 1e-3 and table["p"].iloc[1] > 1e-3
+    assert set(table["seeds (rho_ours, authors)"]) == {"4, 4"}
+    assert claims.sgb_variant_tests({"cells": cells}, "per_pair").empty
+
+
 def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfinished_cells():
     """The DGB 10 points above the SGB near 200x, 10 below near 700x; a DGB cell stopped
     short of its rounds and a ratio with one seed count for nothing."""
