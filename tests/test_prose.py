@@ -134,3 +134,29 @@ def test_glue_all_glues_every_text(monkeypatch):
     monkeypatch.setattr(book, "glue", lambda name, text: glued.__setitem__(name, text))
     book.glue_all({"a": "1 %", "b": "**reproduced**"})
     assert glued == {"a": "1 %", "b": "**reproduced**"}
+
+
+def test_the_variants_texts_say_a_known_shift_and_a_null_one():
+    """Rewritten to known accuracies: the KL per type pair 5 points above the authors' at
+    every ratio, our rho start level with them (the same values, the seeds' order turned)."""
+    full = results.load("sgb_full_fashion-mnist_cpu.json")
+    cells = [c for c in full["results"]["cells"].values() if c["variant"] == "authors"]
+    rewritten = {}
+    for i, cell in enumerate(cells):
+        rewritten[f"authors{i}"] = cell
+        rewritten[f"per_pair{i}"] = {
+            **cell,
+            "variant": "per_pair",
+            "accuracy": cell["accuracy"] + 0.05,
+        }
+        twin = next(
+            c
+            for c in cells
+            if c["setting"] == cell["setting"] and c["seed"] == (cell["seed"] + 1) % 3
+        )
+        rewritten[f"rho_ours{i}"] = {**twin, "variant": "rho_ours"}
+    full["results"]["cells"] = rewritten
+    texts = prose.sgb_full(full)
+    assert texts["full_pair_shift"].startswith("+5.0 to +5.0 points over 7 ratios (7 of whose")
+    assert texts["full_rho_shift"].startswith("+0.0 to +0.0 points over 7 ratios (0 of whose")
+    assert texts["full_rho_conclusion"].endswith("at none of the 7 ratios")
