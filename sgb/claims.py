@@ -119,15 +119,17 @@ def untestable(key: str, figure: str, claim: str, paper: str, reason: str) -> Ro
 # Figure 2 ---------------------------------------------------------------------------------
 
 
-def _accuracies(records: list[dict], model: str, min_seeds: int = 1) -> dict[float, np.ndarray]:
+def _accuracies(
+    records: list[dict], model: str, min_seeds: int = 1, score: str = "accuracy"
+) -> dict[float, np.ndarray]:
     """Per setting of ``model`` (keyed by its compression, ours) run at ``min_seeds`` seeds
-    or more, the seeds' accuracies."""
+    or more, the seeds' accuracies (their field ``score``)."""
     by_setting: dict[int, list[dict]] = {}
     for r in records:
         if r["model"] == model:
             by_setting.setdefault(r["setting"], []).append(r)
     return {
-        float(np.mean([r["compression"] for r in rs])): np.array([r["accuracy"] for r in rs])
+        float(np.mean([r["compression"] for r in rs])): np.array([r[score] for r in rs])
         for rs in by_setting.values()
         if len(rs) >= min_seeds
     }
@@ -229,13 +231,16 @@ def figure2_ratio_tests(results: dict) -> pd.DataFrame:
     return _welch_table(sgb, dgb, nearest_pairs(sgb, dgb), ("SGB", "DGB"))
 
 
-def sgb_variant_tests(sgb_full: dict, variant: str, baseline: str = "authors") -> pd.DataFrame:
-    """How much one change of the SGB's training moves Figure 2: the individuals of
-    ``variant`` minus those of ``baseline`` (``_welch_table``; variants of ``sgb.experiments.
-    sgb_full``, whose results are ``sgb_full``) at every ratio where both have 2 seeds or more."""
+def sgb_variant_tests(
+    sgb_full: dict, variant: str, baseline: str = "authors", score: str = "accuracy"
+) -> pd.DataFrame:
+    """How much one change of the SGB's training moves Figure 2: ``variant`` minus
+    ``baseline`` (``_welch_table``; variants of ``sgb.experiments.sgb_full``, whose results
+    are ``sgb_full``) at every ratio where both have 2 seeds or more, in the individuals'
+    accuracy (``score="accuracy"``) or the mean network's (``"mean_network"``)."""
     cells = sgb_full["cells"].values()
     of = {
-        name: _accuracies([c for c in cells if c["variant"] == name], "sgb", min_seeds=2)
+        name: _accuracies([c for c in cells if c["variant"] == name], "sgb", 2, score)
         for name in (variant, baseline)
     }
     pairs = [(v, b) for b, v in nearest_pairs(of[baseline], of[variant])]

@@ -458,11 +458,12 @@ def sgb_full(payload: Payload | None) -> dict[str, str]:
     and mean network at its lowest compression (``full_low``: mean over its seeds, %), the
     range of the trained hidden-layer sigma over all cells of the authors' variant
     (``full_sigma``) and of our rho start (``full_rho_sigma``), and how far the individuals
-    of the KL per type pair (``full_pair_shift``) and of our rho start (``full_rho_shift``)
-    lie from the authors' (``claims.sgb_variant_tests``), and at how many ratios the rho
+    of the KL per type pair (``full_pair_shift``) and of our rho start (``full_rho_shift``;
+    its mean networks, ``full_rho_mean_shift``) lie from the authors'
+    (``claims.sgb_variant_tests``), and at how many ratios the rho
     start makes a difference whose 95 % interval excludes 0 (``full_rho_conclusion``)."""
     names = ("full_status", "full_low", "full_sigma", "full_rho_sigma")
-    shifts = ("full_pair_shift", "full_rho_shift", "full_rho_conclusion")
+    shifts = ("full_pair_shift", "full_rho_shift", "full_rho_mean_shift", "full_rho_conclusion")
     texts = dict.fromkeys(names + shifts, NOT_RUN)
     if payload is None:
         return texts
@@ -488,6 +489,8 @@ def sgb_full(payload: Payload | None) -> dict[str, str]:
         )
     pair, rho = (claims.sgb_variant_tests(results, v) for v in ("per_pair", "rho_ours"))
     texts["full_pair_shift"], texts["full_rho_shift"] = _variant_shift(pair), _variant_shift(rho)
+    rho_mean = claims.sgb_variant_tests(results, "rho_ours", score="mean_network")
+    texts["full_rho_mean_shift"] = _variant_shift(rho_mean)
     if not rho.empty:
         apart = _excluding_zero(rho)
         texts["full_rho_conclusion"] = (

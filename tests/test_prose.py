@@ -159,4 +159,5 @@ def test_the_variants_texts_say_a_known_shift_and_a_null_one():
     texts = prose.sgb_full(full)
     assert texts["full_pair_shift"].startswith("+5.0 to +5.0 points over 7 ratios (7 of whose")
     assert texts["full_rho_shift"].startswith("+0.0 to +0.0 points over 7 ratios (0 of whose")
+    assert texts["full_rho_mean_shift"].startswith("+0.0 to +0.0 points over 7 ratios")
     assert texts["full_rho_conclusion"].endswith("at none of the 7 ratios")
