@@ -251,17 +251,25 @@ def sgb_full_table(payload: Payload) -> pd.DataFrame:
             "hidden types": r["setting"],
             "compression (ours)": r["compression"],
             "compression (authors')": r["compression_authors"],
-            "seeds": r["seed"],
+            "seed": r["seed"],
             "individuals": r["accuracy"],
-            "individuals (SD)": r["accuracy"],
             "mean network": r["mean_network"],
             **{f"sigma, layer {i}": layer["mean_sigma"] for i, layer in enumerate(r["layers"])},
         }
         for r in payload["results"]["cells"].values()
     )
-    how = {c: "mean" for c in cells.columns[2:]} | {"seeds": "count", "individuals (SD)": "std"}
+    sigmas = [c for c in cells.columns if c.startswith("sigma")]
+    how = {
+        "compression (ours)": ("compression (ours)", "mean"),
+        "compression (authors')": ("compression (authors')", "mean"),
+        "seeds": ("seed", "count"),
+        "individuals": ("individuals", "mean"),
+        "individuals (SD)": ("individuals", "std"),
+        "mean network": ("mean network", "mean"),
+        **{c: (c, "mean") for c in sigmas},
+    }
     return (
         cells.groupby(["variant", "hidden types"])
-        .agg(how)
+        .agg(**how)
         .sort_values(["variant", "compression (ours)"])
     )
