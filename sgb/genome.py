@@ -89,6 +89,25 @@ def with_tables(params: dict, genome: Genome) -> dict:
     return out
 
 
+def aliased_table(table: jnp.ndarray) -> jnp.ndarray:
+    """The table (k_in, k_out) as the authors' RL layers read it: entry [a, b] is flat
+    entry (a + 1)(b + 1) - 1 of ``table`` (``RL/utils.py``, ``gather_nd_torch_dims_flat``,
+    whose ``to1d`` gets the type arrays plus one where it wants the table's sizes). Pairs
+    whose (a + 1)(b + 1) agree share one Gaussian, and entries no pair reaches are unused;
+    the gradient of a shared entry sums over the pairs that read it."""
+    table = validation.array("table", table, min_ndim=2)
+    if table.ndim != 2:
+        raise ValueError(f"table must be (k_in, k_out), got shape {tuple(table.shape)}")
+    k_in, k_out = table.shape
+    a, b = np.meshgrid(np.arange(k_in), np.arange(k_out), indexing="ij")
+    return table.reshape(-1)[(a + 1) * (b + 1) - 1]
+
+
+def aliased(layer: LayerGenome) -> LayerGenome:
+    """A dense layer's genome with both tables read as ``aliased_table`` reads them."""
+    return LayerGenome(aliased_table(layer.mu), aliased_table(layer.rho))
+
+
 def sown(collection: Mapping, name: str) -> dict[str, jnp.ndarray]:
     """What the SGB layers sowed under ``name`` into a Flax collection (``"kernel"`` and
     ``"noise"`` into ``"individual"``, ``"kl"`` into ``"losses"``), by layer path."""

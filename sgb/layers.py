@@ -122,6 +122,17 @@ def _replace(_previous, new):
     return new
 
 
+def _rho_initializer(mean: float, std: float):
+    """Raw spreads drawn from N(mean, std^2); exactly ``mean`` where ``std`` is 0."""
+    if std == 0:
+        return nn.initializers.constant(mean)
+
+    def init(key, shape, dtype=jnp.float32):
+        return mean + std * jax.random.normal(key, shape, dtype)
+
+    return init
+
+
 class _GenomeKernel(nn.Module):
     """Samples a kernel of ``shape`` from a type table of ``types``; sows its KL."""
 
@@ -131,6 +142,7 @@ class _GenomeKernel(nn.Module):
     kl_counting: KLCounting
     mean_init_std: float
     rho_init: float
+    rho_init_std: float = 0.0
 
     @nn.compact
     def __call__(
@@ -139,7 +151,7 @@ class _GenomeKernel(nn.Module):
         """The drawn kernel (the mean kernel if ``mean_network``); with ``tables_only``,
         the type tables (mu, sigma) instead. Sows the KL (``sgb.genome.layer_kl``) when sampling."""
         mu = self.param("mu", nn.initializers.normal(self.mean_init_std), self.types)
-        rho = self.param("rho", nn.initializers.constant(self.rho_init), self.types)
+        rho = self.param("rho", _rho_initializer(self.rho_init, self.rho_init_std), self.types)
         sigma = softplus(rho)
         if tables_only:
             if not mean_network:
@@ -169,6 +181,7 @@ class _BayesianBias(nn.Module):
     kl_counting: KLCounting
     mean_init_std: float
     rho_init: float
+    rho_init_std: float = 0.0
 
     @nn.compact
     def __call__(self, mean_network: bool) -> jnp.ndarray:
@@ -180,6 +193,7 @@ class _BayesianBias(nn.Module):
             self.kl_counting,
             self.mean_init_std,
             self.rho_init,
+            self.rho_init_std,
             name="genome",
         )
         return genome(mean_network)[0]
@@ -195,6 +209,8 @@ class SGBDense(nn.Module):
     each neuron's from its own Gaussian (a genome of shape (1, features) at the layer's
     path + ``/bias``, means starting with the kernel means' standard deviation), as the
     authors' RL layers do (``RL/custom_layers.py``); otherwise they are plain parameters.
+    Every raw spread starts at ``rho_init`` plus N(0, ``rho_init_std``^2) (exactly
+    ``rho_init`` at the default 0).
     """
 
     features: int
@@ -206,9 +222,11 @@ class SGBDense(nn.Module):
     rho_init: float = -5.0
     in_features: int | None = None
     bayesian_bias: bool = False
+    rho_init_std: float = 0.0
 
     def __post_init__(self) -> None:
         validation.integer("features", self.features)
+        validation.non_negative("rho_init_std", self.rho_init_std)
         validation.instance("bayesian_bias", self.bayesian_bias, bool)
         for name in ("in_types", "out_types", "in_features"):
             if getattr(self, name) is not None:
@@ -233,6 +251,7 @@ class SGBDense(nn.Module):
             kl_counting=self.kl_counting,
             mean_init_std=self.mean_init_std / n_in**0.5,
             rho_init=self.rho_init,
+            rho_init_std=self.rho_init_std,
             name="genome",
         )
         if self.bayesian_bias:
@@ -244,6 +263,7 @@ class SGBDense(nn.Module):
                 self.kl_counting,
                 self.mean_init_std / n_in**0.5,
                 self.rho_init,
+                self.rho_init_std,
                 name="bias",
             )(mean_network)
         else:

@@ -21,6 +21,7 @@ SETTINGS = LossSettings(
     gae_lambda=0.8,
     reward_scaling=2.0,
     regime="ours",
+    entropy_draw="reparameterised",
 )
 
 

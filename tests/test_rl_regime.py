@@ -1,5 +1,10 @@
 """The authors' training regime: one draw per step shared by every environment, and with
-no spread at all, vanilla PPO."""
+no spread at all, vanilla PPO; and the five places where their RL code departs from ours
+(``self-supervisor/genomic_bottleneck_v2`` at 7effad6), each against their formula: the
+aliased type pairs, the entropy's draw, the normaliser, the initialisation and the
+evaluation."""
+
+from dataclasses import replace
 
 import jax
 import jax.numpy as jnp
@@ -7,8 +12,12 @@ import numpy as np
 from reach import SPEC, reach_config
 
 from sgb import genome
-from sgb.rl.agent import NetworkConfig, Params, tanh_gaussian_log_prob
-from sgb.rl.ppo import init_state
+from sgb.celltypes import assign_cell_types, expand_table
+from sgb.rl.agent import Network, NetworkConfig, Params, tanh_gaussian_log_prob
+from sgb.rl.losses import entropy_estimate
+from sgb.rl.normalizer import init_normalizer, normalize, update
+from sgb.rl.ppo import PPOConfig, init_state, train
+from sgb.rl.regimes import authors_regime, with_settings
 from sgb.rl.trainer import make_trainer
 
 
@@ -113,3 +122,159 @@ def test_with_no_spread_the_authors_sgb_trains_as_vanilla_ppo():
     # and it moved: the comparison is between trained networks
     start = params.actor["params"]["out"]["kernel"]
     assert not np.allclose(start, trained.actor["params"]["out"]["kernel"])
+
+
+def _their_flat_index(n_in: int, k_in: int, n_out: int, k_out: int) -> np.ndarray:
+    """The flat table index of every synapse (n_in, n_out) as ``RL/utils.py`` computes it:
+    ``get_indices`` pairs each synapse's (pre, post) types, and ``to1d(x, y, z, num_inp,
+    num_out) = z * num_inp * num_out + y * num_out + x`` is called with x = post, y = pre,
+    z = 0 and, for the sizes, the type arrays plus one (``gather_dims[i][-1] + 1``)."""
+    pre = assign_cell_types(n_in, k_in)[:, None] * np.ones((1, n_out), dtype=np.int64)
+    post = assign_cell_types(n_out, k_out)[None, :] * np.ones((n_in, 1), dtype=np.int64)
+    num_inp, num_out = pre + 1, post + 1
+    return 0 * num_inp * num_out + pre * num_out + post
+
+
+def test_the_aliased_layers_read_the_table_entry_their_code_indexes():
+    # the Ant's actor at 64 types: 27 observation entries -> 128 -> 128 -> 16 outputs
+    config = NetworkConfig(
+        cell_types=64, typed_inputs=True, sgb_output=True, aliased_pairs=True, mean_init=0.1
+    )
+    actor = Network(config.architecture, 27, 16)
+    params = actor.init(jax.random.PRNGKey(0), config)
+    stored = genome.of_params(params)
+    used = {}
+    for (name, (n_in, n_out)), (kernel, _) in zip(
+        actor.sgb_shapes.items(), actor.layers(params, None), strict=False
+    ):
+        k_in, k_out = stored[name].mu.shape
+        flat = _their_flat_index(n_in, k_in, n_out, k_out)
+        np.testing.assert_array_equal(kernel, np.asarray(stored[name].mu).reshape(-1)[flat])
+        used[name] = (len(np.unique(flat)), k_in * k_out)
+    # the entries their layers use at 64 types, as counted by running their code
+    assert used == {"hidden_0": (732, 1728), "hidden_1": (1263, 4096), "out": (474, 1024)}
+    # the paper's layer (every pair its own Gaussian) reads entry [a, b] for pair (a, b)
+    plain = Network(replace(config, aliased_pairs=False).architecture, 27, 16)
+    kernel = plain.layers(params, None)[1][0]
+    np.testing.assert_array_equal(kernel, expand_table(stored["hidden_1"].mu, (128, 128)))
+
+
+def test_an_aliased_entry_learns_from_every_pair_that_reads_it():
+    table = jnp.arange(12.0).reshape(3, 4)
+    weights = jax.random.normal(jax.random.PRNGKey(1), (3, 4))
+    grad = jax.grad(lambda t: jnp.sum(weights * genome.aliased_table(t)))(table)
+    flat = _their_flat_index(3, 3, 4, 4)
+    expected = np.zeros(12)
+    np.add.at(expected, flat.reshape(-1), np.asarray(weights).reshape(-1))
+    np.testing.assert_allclose(np.asarray(grad).reshape(-1), expected, rtol=1e-6)
+
+
+def test_the_detached_entropy_trains_only_its_gaussian_part():
+    # their dist_entropy: 0.5 + log(sqrt(2 pi) scale) + log|tanh'(u)| at u = torch.normal(
+    # loc, scale), which passes no gradient: d/dloc = 0 and d/dscale = 1/scale
+    loc = jnp.array([[0.3, -1.2], [2.0, 0.1]])
+    scale = jnp.array([[0.5, 1.5], [0.2, 0.9]])
+    key = jax.random.PRNGKey(3)
+
+    def total(draw):
+        return lambda loc, scale: jnp.sum(entropy_estimate(loc, scale, key, draw))
+
+    d_loc, d_scale = jax.grad(total("detached"), argnums=(0, 1))(loc, scale)
+    np.testing.assert_array_equal(d_loc, np.zeros_like(loc))
+    np.testing.assert_allclose(d_scale, 1.0 / scale, rtol=1e-6)
+    # the reparameterised draw trains the tanh term too; both estimate the same value
+    r_loc, _ = jax.grad(total("reparameterised"), argnums=(0, 1))(loc, scale)
+    assert np.all(np.abs(r_loc) > 1e-3)
+    np.testing.assert_array_equal(
+        total("detached")(loc, scale), total("reparameterised")(loc, scale)
+    )
+
+
+def _their_normaliser(batches: list[np.ndarray]) -> tuple[float, np.ndarray, np.ndarray]:
+    """``update_normalization`` of ``RL/models.py``, line for line, over (T + 1, B, obs)
+    batches: (num_steps, running_mean, running_variance)."""
+    n, mean, var = 0.0, np.zeros(batches[0].shape[-1]), np.zeros(batches[0].shape[-1])
+    for obs in batches:
+        n += obs.shape[0] * obs.shape[1]
+        to_old = obs - mean
+        mean = mean + np.sum(to_old / n, axis=(0, 1))
+        var = var + np.sum((obs - mean) * to_old, axis=(0, 1))
+    return n, mean, var
+
+
+def _their_normalize(n, mean, var, obs):
+    variance = np.clip(var / (n + 1.0), 1e-6, 1e6)
+    return np.clip((obs - mean) / np.sqrt(variance), -5, 5)
+
+
+def test_the_authors_normaliser_is_theirs():
+    rng = np.random.default_rng(0)
+    obs = rng.normal(loc=[0.0, 3.0, -1.0], scale=[1.0, 0.01, 4.0], size=(4, 6, 8, 3))
+    probe = rng.normal(loc=[0.0, 3.0, -1.0], scale=[1.0, 0.01, 4.0], size=(5, 3))
+    obs, probe = obs.astype(np.float32), probe.astype(np.float32)
+    # before any update: std 1e-3, so every input is clipped to +-5 (ours: unchanged)
+    empty = init_normalizer(3)
+    np.testing.assert_allclose(normalize(empty, probe, "authors"), np.clip(probe * 1e3, -5, 5))
+    np.testing.assert_array_equal(normalize(empty, probe, "ours"), probe)
+    ours = empty
+    for i, batch in enumerate(obs):
+        ours = update(ours, jnp.asarray(batch), jnp.ones(batch.shape[:-1]))
+        n, mean, var = _their_normaliser(list(obs[: i + 1]))
+        np.testing.assert_allclose(ours.count, n)
+        np.testing.assert_allclose(ours.mean, mean, rtol=1e-5, atol=1e-6)
+        np.testing.assert_allclose(ours.m2, var, rtol=1e-4)
+        np.testing.assert_allclose(
+            normalize(ours, probe, "authors"), _their_normalize(n, mean, var, probe), atol=1e-4
+        )
+
+
+def test_the_authors_normaliser_counts_each_unrolls_bootstrap_observation():
+    network = NetworkConfig(hidden=(8,), normalizer="authors")
+    config = _authors(network)
+    trainer = make_trainer(config.step_settings())
+    ts, _ = trainer.iterations(init_state(config, seed=0), 1)
+    # 2 unrolls of 4 environments, 5 steps each and the bootstrap observation
+    assert float(ts.normalizer.count) == 2 * 4 * (5 + 1)
+    plain = _authors(NetworkConfig(hidden=(8,)))
+    ts, _ = make_trainer(plain.step_settings()).iterations(init_state(plain, seed=0), 1)
+    assert float(ts.normalizer.count) == 2 * 4 * 5
+
+
+def test_the_authors_networks_start_as_torch_and_blitz_start_them():
+    regime = authors_regime(PPOConfig())
+    vanilla = make_trainer(regime.step_settings()).agent.init(
+        jax.random.PRNGKey(0), jax.random.PRNGKey(1), regime.network
+    )
+    # torch's nn.Linear: kernel and bias uniform on +-1/sqrt(fan_in)
+    for layer in vanilla.actor["params"].values():
+        kernel, bias = np.asarray(layer["kernel"]), np.asarray(layer["bias"])
+        bound = kernel.shape[0] ** -0.5
+        for values in (kernel, bias):
+            assert np.abs(values).max() <= bound
+        assert abs(kernel.var() * 3 / bound**2 - 1) < 0.05  # Var U(-b, b) = b^2 / 3
+        assert np.abs(bias).max() > bound / 2  # not zeros
+    # their SGB genome: means and rho each N(init, 0.1^2), rho's around -7, biases too
+    sgb = with_settings(
+        replace(regime, network=replace(regime.network, cell_types=64, bayesian_biases=True)),
+        "authors",
+    )
+    params = make_trainer(sgb.step_settings()).agent.init(
+        jax.random.PRNGKey(0), jax.random.PRNGKey(1), sgb.network
+    )
+    tables = genome.of_params(params.actor)
+    rho = np.concatenate([np.ravel(t.rho) for t in tables.values()])
+    mu = np.concatenate([np.ravel(t.mu) for t in tables.values()])
+    assert rho.size > 6000 and mu.size == rho.size
+    assert abs(rho.mean() + 7.0) < 0.01 and abs(rho.std() - 0.1) < 0.005
+    assert abs(mu.mean()) < 0.01 and abs(mu.std() - 0.1) < 0.005
+    assert "hidden_0/bias" in tables
+
+
+def test_the_authors_evaluate_at_step_0_and_after_every_chunk():
+    config = replace(_authors(NetworkConfig(hidden=(8,))), num_evals=2, eval_at_start=True)
+    result = train(config, seed=0, progress=False)
+    steps = config.iterations // 2 * config.steps_per_iteration
+    assert result.eval_steps == [0, steps, 2 * steps]
+    assert np.all(np.isfinite(result.eval_returns))
+    regime = authors_regime(PPOConfig())
+    assert regime.eval_at_start and regime.eval_individuals == regime.num_envs == 2048

@@ -232,14 +232,15 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "regime": Experiment(
         "regime",
-        figure="Fig. 3 and the genomes of Figs. 4E and 5 under the authors' own training "
-        "regime at the paper's 5 x 10^7 steps (chapter 5)",
+        figure="Fig. 3C at the paper's 5 x 10^7 steps under the authors' own training "
+        "regime, 5 seeds per point, and the genomes of Figs. 4E and 5 (chapter 5)",
         inputs="the Ant (spring)",
         costs={
-            "smoke": "2 runs of 320 steps, not measured",
-            "cpu": "8 runs of 5 x 10^7 steps, each about an hour of one CPU core (not "
-            "yet measured end to end); resumable, and several processes share it",
-            "paper": "the cpu runs evaluated over 2048 environments; not measured",
+            "smoke": f"2 runs of 320 steps, 76 s {_TWO_CORES}",
+            "cpu": "40 runs of 5 x 10^7 steps, each 1.5 to 2 hours of one CPU core with its "
+            "11 evaluations (benchmarks/bench_regime.py); resumable, and several "
+            "processes share it",
+            "paper": "the cpu runs; not measured on a GPU",
         },
         shares_runs=True,
     ),

@@ -96,7 +96,7 @@ class Genome:
     def checkpoint(self, profile: str, env: str = "ant") -> str:
         """The file name of its checkpoint, trained at ``profile``."""
         if self.regime:
-            return regime.checkpoint_name(self.cell_types, self.seed, profile)
+            return regime.checkpoint_name(regime.RegimeRun(self.cell_types, self.seed), profile)
         return checkpoint_name(env, self.cell_types, self.seed, profile, self.settings)
 
 

@@ -1,16 +1,22 @@
-"""The Ant under the authors' own training regime at the paper's budget of 5 x 10^7 steps.
+"""Figure 3C at the paper's budget: the Ant under the authors' own training regime,
+5 x 10^7 steps, 5 seeds per point.
 
-Vanilla PPO and the authors' genome at 64 types first (seed 0, then more seeds), then 128
-and 16 types (seed 0): every run of ``sgb.rl.regimes.authors_regime``, the SGB runs with
-the authors' genome (``sgb.rl.regimes.with_settings(..., "authors")``). The vanilla
-network has the SGB's width, 128 (their ``ant_vanilla.yaml`` has 64 and 10^8 steps), so
-that the comparison isolates the bottleneck at one budget. Each run is evaluated as the
-authors evaluate (``sgb.rl.trainer.Trainer.window_return``), and its return is also
-given on their Figure 3 scale (``sgb.rl.regimes.authors_scale``).
+Every run is ``sgb.rl.regimes.authors_regime`` (their normaliser, entropy draw,
+initialisation and evaluation included), the SGB runs with the authors' genome
+(``sgb.rl.regimes.with_settings(..., "authors")``: a Gaussian per type pair, as the paper
+describes) and, as an ablation, with the type pairs their RL layers alias
+(``"authors_aliased"``). The vanilla network has the SGB's width, 128 (their
+``ant_vanilla.yaml`` has 64 and 10^8 steps), so that the comparison isolates the
+bottleneck at one budget. Each run is evaluated as the authors evaluate
+(``sgb.rl.trainer.Trainer.window_return`` on the 2048 training environments, at step 0
+and after each tenth), and its return is also given on their Figure 3 scale
+(``sgb.rl.regimes.authors_scale``).
 
-Runs are resumable and shared between processes as Figure 3's are
-(``sgb.experiments.rl.trained_run``, ``sgb.runlock``); after every run the results file
-is written again from every finished checkpoint (``"complete": false`` until all are).
+The runs train in the order Figure 3C needs them: vanilla, 128 and 16 types at seeds 0-4,
+then 64, then 32, then the aliased layer at 64 and 16, then 48. They are resumable and
+shared between processes as Figure 3's are (``sgb.experiments.rl.trained_run``,
+``sgb.runlock``); after every run the results file is written again from every finished
+checkpoint (``"complete": false`` until all are).
 """
 
 from dataclasses import dataclass, replace
@@ -28,31 +34,62 @@ from sgb.experiments.rl import (
     trained_run,
 )
 from sgb.recording import Recording, start
-from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_regime, authors_scale, with_settings
+
+GENOMES = ("authors", "authors_aliased")  # a Gaussian per type pair; their aliased layers
+SEEDS = tuple(range(5))
+
+
+@dataclass(frozen=True)
+class RegimeRun:
+    """One run: its cell types (``None``: vanilla), seed and genome settings (``GENOMES``;
+    a vanilla run's is ``"authors"``, which it does not read)."""
+
+    cell_types: int | None
+    seed: int
+    genome: str = "authors"
+
+    def __post_init__(self) -> None:
+        validation.seed("seed", self.seed)
+        validation.choice("genome", self.genome, GENOMES)
+        if self.cell_types is not None:
+            validation.integer("cell types", self.cell_types)
+        elif self.genome != "authors":
+            raise ValueError("a vanilla run has no genome to alias")
+
+    @property
+    def label(self) -> str:
+        """``vanilla``, ``k64`` or ``k64_aliased``."""
+        if self.cell_types is None:
+            return "vanilla"
+        return f"k{self.cell_types}" + ("_aliased" if self.genome == "authors_aliased" else "")
 
 
 @dataclass(frozen=True)
 class RegimeRuns:
-    """The runs, (cell types or None for vanilla, seed) in the order they train, and the
-    PPO settings they share before ``run_config`` makes each one."""
+    """The runs in the order they train, and the PPO settings they share before
+    ``run_config`` makes each one."""
 
-    runs: tuple[tuple[int | None, int], ...]
+    runs: tuple[RegimeRun, ...]
     ppo: PPOConfig
 
     def __post_init__(self) -> None:
-        for k, seed in self.runs:
-            validation.seed("seed", seed)
-            if k is not None:
-                validation.integer("cell types", k)
+        for r in self.runs:
+            validation.instance("run", r, RegimeRun)
+
+
+def grid(seeds: tuple[int, ...] = SEEDS) -> tuple[RegimeRun, ...]:
+    """Figure 3C's runs in the order they train (module docstring)."""
+    first = [RegimeRun(k, s) for s in seeds for k in (None, 128, 16)]
+    then = [RegimeRun(k, s) for k in (64, 32) for s in seeds]
+    aliased = [RegimeRun(k, s, "authors_aliased") for s in seeds for k in (64, 16)]
+    return (*first, *then, *aliased, *(RegimeRun(48, s) for s in seeds))
 
 
 def regime_config(profile: str) -> RegimeRuns:
-    """The runs at ``profile``: at ``cpu`` and ``paper`` vanilla and 64 types at seed 0,
-    then 128 and 16 types at seed 0, then vanilla and 64 types at seeds 1 and 2.
-    Evaluations: 256 environments at ``cpu`` (the authors' 2048 cost 2 x 10^6 steps each,
-    40 % of the training), 2048 at ``paper``; smoke is a few hundred steps."""
+    """The runs at ``profile``: at ``cpu`` and ``paper`` the whole grid (40 runs of
+    5 x 10^7 steps); smoke is a vanilla and a 16-type run of a few hundred steps."""
     check_profile(profile)
     base = authors_regime(ppo_settings("ant", "cpu"))
     if profile == "smoke":
@@ -67,21 +104,21 @@ def regime_config(profile: str) -> RegimeRuns:
             eval_individuals=4,
             episode_length=64,
         )
-        return RegimeRuns(((None, 0), (16, 0)), ppo)
-    runs = ((None, 0), (64, 0), (128, 0), (16, 0), (None, 1), (64, 1), (None, 2), (64, 2))
-    return RegimeRuns(runs, replace(base, eval_individuals=256 if profile == "cpu" else 2048))
+        return RegimeRuns((RegimeRun(None, 0), RegimeRun(16, 0)), ppo)
+    return RegimeRuns(grid(), base)
 
 
-def run_config(config: RegimeRuns, cell_types: int | None) -> PPOConfig:
-    """The settings of the run at ``cell_types``: the authors' genome for an SGB."""
-    network = NetworkConfig(cell_types=cell_types, bayesian_biases=cell_types is not None)
+def run_config(config: RegimeRuns, run: RegimeRun) -> PPOConfig:
+    """The settings of ``run``: the regime's network at its cell types, under its genome
+    settings for an SGB."""
+    sgb = run.cell_types is not None
+    network = replace(config.ppo.network, cell_types=run.cell_types, bayesian_biases=sgb)
     ppo = replace(config.ppo, network=network)
-    return ppo if cell_types is None else with_settings(ppo, "authors")
+    return with_settings(ppo, run.genome) if sgb else ppo
 
 
-def checkpoint_name(cell_types: int | None, seed: int, profile: str) -> str:
-    label = "vanilla" if cell_types is None else f"k{cell_types}"
-    return f"ant_regime_{label}_s{seed}_{profile}.msgpack"
+def checkpoint_name(run: RegimeRun, profile: str) -> str:
+    return f"ant_regime_{run.label}_s{run.seed}_{profile}.msgpack"
 
 
 def run(profile: str, out_dir: Path) -> Path:
@@ -89,14 +126,14 @@ def run(profile: str, out_dir: Path) -> Path:
     after each."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_ant")
     config = recording.config
-    for i, (k, seed) in enumerate(config.runs):
-        label = f"regime ant k={k} seed {seed} ({i + 1}/{len(config.runs)})"
-        checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(k, seed, profile)
+    for i, r in enumerate(config.runs):
+        label = f"regime ant {r.label} seed {r.seed} ({i + 1}/{len(config.runs)})"
+        checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(r, profile)
         with runlock.claim(checkpoint) as mine:
             if not mine:
                 print(f"{label}: another process is training it", flush=True)
                 continue
-            if trained_run(run_config(config, k), seed, checkpoint, profile, label):
+            if trained_run(run_config(config, r), r.seed, checkpoint, profile, label):
                 write_regime(recording, Path(out_dir))
     return write_regime(recording, Path(out_dir))
 
@@ -107,12 +144,13 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
     with each seed's fraction of the vanilla run of the same seed."""
     config = recording.config
     runs = []
-    for k, seed in config.runs:
-        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(k, seed, recording.profile)
-        record = finished_run(checkpoint, run_config(config, k))
+    for r in config.runs:
+        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(r, recording.profile)
+        record = finished_run(checkpoint, run_config(config, r))
         if record is not None:
             scaled = authors_scale("ant", record["final_return"])
-            runs.append({"cell_types": k, "seed": seed, "authors_scale": scaled, **record})
+            run = {"cell_types": r.cell_types, "seed": r.seed, "genome": r.genome}
+            runs.append({**run, "authors_scale": scaled, **record})
     results = {
         "env": "ant",
         "complete": len(runs) == len(config.runs),
@@ -123,17 +161,19 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
 
 
 def summarise_regime(runs: list[dict]) -> list[dict]:
-    """Per cell-type count (vanilla first): seeds, mean final return and SEM, mean on the
-    authors' scale, and the fraction of vanilla over the seeds that have a vanilla run."""
+    """Per genome and cell-type count (vanilla first): seeds, mean final return and SEM,
+    mean on the authors' scale, and the fraction of vanilla over the seeds that have a
+    vanilla run."""
     vanilla = {r["seed"]: r["final_return"] for r in runs if r["cell_types"] is None}
     out = []
-    for k in dict.fromkeys(r["cell_types"] for r in runs):
-        mine = [r for r in runs if r["cell_types"] == k]
+    for genome, k in dict.fromkeys((r.get("genome", "authors"), r["cell_types"]) for r in runs):
+        mine = [r for r in runs if (r.get("genome", "authors"), r["cell_types"]) == (genome, k)]
         returns = np.array([r["final_return"] for r in mine])
         paired = [r["final_return"] / vanilla[r["seed"]] for r in mine if r["seed"] in vanilla]
         out.append(
             {
                 "cell_types": k,
+                "genome": genome,
                 "seeds": [r["seed"] for r in mine],
                 "mean_return": float(returns.mean()),
                 "sem_return": seed_sem(returns),

@@ -7,7 +7,10 @@ deterministic ``nn.Dense``, as in the paper. The authors' code does two things m
 a switch here: ``typed_inputs`` groups the observation entries into types too, and
 ``sgb_output`` makes the output layer an SGB layer (``min(cell_types, n)`` types for n
 neurons), and ``bayesian_biases`` draws every SGB layer's biases too, per neuron. In
-vanilla mode every layer is ``nn.Dense``.
+vanilla mode every layer is ``nn.Dense``. Two more switches follow the authors' RL code
+where it departs from the paper or from us: ``aliased_pairs`` reads a layer's type table
+as their layers do (``sgb.genome.aliased_table``), and ``normalizer`` scales the
+observations by their convention (``sgb.rl.normalizer``).
 
 An individual is born from a PRNG key (``Agent.birth``): the standard normal noise of
 every SGB synapse of its actor and critic (``sgb.genome.draw_noise``), kept for its whole
@@ -29,10 +32,11 @@ import jax.numpy as jnp
 from sgb import genome, validation
 from sgb.layers import SGBDense, _check_input, individual_matmul
 from sgb.priors import GaussianPrior, Prior, ScaleMixturePrior
-from sgb.rl.normalizer import Normalizer, normalize
+from sgb.rl.normalizer import CONVENTIONS, Normalizer, normalize
 
 Layers = list[tuple[jnp.ndarray, jnp.ndarray]]  # (kernel, bias) of every layer, input to output
 MIN_STD = 1e-3
+DENSE_INITS = ("flax", "torch")
 
 
 @dataclass(frozen=True)
@@ -45,6 +49,10 @@ class Architecture:
     ``typed_inputs`` groups the observation entries into ``cell_types`` types;
     ``sgb_output`` makes the output layer an SGB layer; ``bayesian_biases`` draws the SGB
     layers' biases, each neuron's from its own Gaussian (``sgb.layers.SGBDense``).
+    ``aliased_pairs`` makes type pair (a, b) of every SGB kernel read table entry
+    (a + 1)(b + 1) - 1, as the authors' RL layers index it (a defect of their code: the
+    paper gives every pair its own Gaussian). ``normalizer`` is the convention that
+    scales observations, ``"ours"`` or ``"authors"`` (``sgb.rl.normalizer``).
     """
 
     hidden: tuple[int, ...] = (128, 128)
@@ -53,11 +61,16 @@ class Architecture:
     typed_inputs: bool = False
     sgb_output: bool = False
     bayesian_biases: bool = False
+    aliased_pairs: bool = False
+    normalizer: str = "ours"
 
     def __post_init__(self) -> None:
         validation.integers("hidden", self.hidden)
-        for name in ("typed_inputs", "sgb_output", "bayesian_biases"):
+        for name in ("typed_inputs", "sgb_output", "bayesian_biases", "aliased_pairs"):
             validation.instance(name, getattr(self, name), bool)
+        validation.choice("normalizer", self.normalizer, CONVENTIONS)
+        if self.aliased_pairs and self.cell_types is None:
+            raise ValueError("aliased_pairs needs cell types: a vanilla network has no table")
         if self.cell_types is not None and not (
             0 < validation.integer("cell_types", self.cell_types) <= min(self.hidden)
         ):
@@ -75,15 +88,23 @@ class Architecture:
 @dataclass(frozen=True)
 class NetworkConfig(Architecture):
     """An ``Architecture`` and how its parameters start: ``rho_init`` every spread's raw
-    value; ``mean_init`` the standard deviation of the initial type means (``None``:
-    1/sqrt(n_in) of each layer). Only initialisation reads these two."""
+    value, each drawn from N(rho_init, rho_init_std^2) (the authors': N(-7, 0.1^2),
+    ``RL/custom_layers.py``); ``mean_init`` the standard deviation of the initial type
+    means (``None``: 1/sqrt(n_in) of each layer); ``dense_init`` how the deterministic
+    layers start: ``"flax"`` (lecun-normal kernels, zero biases) or ``"torch"`` (torch's
+    ``nn.Linear``: kernel and bias uniform on +-1/sqrt(n_in)). Only initialisation reads
+    these."""
 
     rho_init: float = -5.0
+    rho_init_std: float = 0.0
     mean_init: float | None = None
+    dense_init: str = "flax"
 
     def __post_init__(self) -> None:
         super().__post_init__()
         validation.real("rho_init", self.rho_init)
+        validation.non_negative("rho_init_std", self.rho_init_std)
+        validation.choice("dense_init", self.dense_init, DENSE_INITS)
         if self.mean_init is not None:
             validation.positive("mean_init", self.mean_init)
 
@@ -127,15 +148,28 @@ class MLP(nn.Module):
                     prior=prior_of(cfg),
                     mean_init_std=1.0 if cfg.mean_init is None else cfg.mean_init * n_in**0.5,
                     rho_init=cfg.rho_init,
+                    rho_init_std=cfg.rho_init_std,
                     in_features=n_in,
                     bayesian_bias=cfg.bayesian_biases,
                     name=name,
                 )(x)
             else:
-                x = nn.Dense(width, name=name)(x)
+                x = _dense(width, n_in=network.widths[i], init=cfg.dense_init, name=name)(x)
             if i < len(cfg.hidden):
                 x = nn.swish(x)
         return x
+
+
+def _dense(width: int, n_in: int, init: str, name: str) -> nn.Dense:
+    """A deterministic layer of ``n_in`` inputs, started as ``init`` (``NetworkConfig``)."""
+    if init == "flax":
+        return nn.Dense(width, name=name)
+    bound = n_in**-0.5
+
+    def uniform(key, shape, dtype=jnp.float32):
+        return jax.random.uniform(key, shape, dtype, -bound, bound)
+
+    return nn.Dense(width, kernel_init=uniform, bias_init=uniform, name=name)
 
 
 @dataclass(frozen=True)
@@ -189,7 +223,7 @@ class Network:
         (N, n_in, n_out), differentiable in ``params``; the other kernels and the biases
         shared. ``noise=None``: the mean network (or the vanilla one), every kernel shared."""
         p = params["params"]
-        developed = genome.of_params(params)
+        developed = self.genome(params)
         if noise is None:
             sgb = genome.mean_kernels(developed, self.sgb_shapes)
         else:
@@ -202,10 +236,22 @@ class Network:
             for name in self.names
         ]
 
+    def genome(self, params: dict) -> genome.Genome:
+        """The type tables its layers read from ``params``: as stored, or with
+        ``aliased_pairs`` each kernel's as the authors' layers read it
+        (``sgb.genome.aliased_table``; the biases' genomes are per neuron, never aliased)."""
+        stored = genome.of_params(params)
+        if not self.architecture.aliased_pairs:
+            return stored
+        return {
+            name: layer if name.endswith("/bias") else genome.aliased(layer)
+            for name, layer in stored.items()
+        }
+
     def kl(self, params: dict, key: jax.Array) -> jnp.ndarray:
         """KL of the network's genome to its prior, synapses counted (nats); 0 for vanilla."""
         prior = prior_of(self.architecture)
-        return genome.kl(genome.of_params(params), self.sgb_shapes, prior, key)
+        return genome.kl(self.genome(params), self.sgb_shapes, prior, key)
 
 
 class Params(NamedTuple):
@@ -250,11 +296,12 @@ class Agent:
     ) -> tuple[jnp.ndarray, jnp.ndarray]:
         """The action distribution of the phenotypes ``actor`` at raw observations ``obs``
         (..., obs): the loc and scale (..., action) of u, the action being tanh(u)."""
-        return action_distribution(forward(actor, normalize(normalizer, obs)))
+        scaled = normalize(normalizer, obs, self.architecture.normalizer)
+        return action_distribution(forward(actor, scaled))
 
     def value(self, critic: Layers, normalizer: Normalizer, obs: jnp.ndarray) -> jnp.ndarray:
         """The critic phenotypes' values at raw observations ``obs`` (...,)."""
-        return forward(critic, normalize(normalizer, obs))[..., 0]
+        return forward(critic, normalize(normalizer, obs, self.architecture.normalizer))[..., 0]
 
 
 def make_agent(architecture: Architecture, obs_size: int, action_size: int) -> Agent:

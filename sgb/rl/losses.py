@@ -2,7 +2,12 @@
 
 Loss = PPO clip loss + c1 * 0.5 * squared value error - c2 * entropy + c3 * KL of the
 actor's and critic's genomes. The entropy is that of the squashed action tanh(u),
-estimated at one reparameterised draw (as Brax's PPO does). Advantages by GAE.
+estimated at one draw of u: reparameterised (``entropy_draw="reparameterised"``, as Brax's
+PPO does), or, as the authors' ``dist_entropy`` draws it with ``torch.normal(loc, scale)``,
+which passes no gradient to loc or scale, a constant to the optimiser
+(``"detached"``: of the entropy only its Gaussian part, the sum of log scale, is
+trained; a defect of their code, kept as an option to train as they did). Advantages by
+GAE.
 
 Under our regime each unroll's individual is rebuilt from its kept noise *under the
 current genome*, so the ratio pi_new(a|s) / pi_old(a|s) compares the same individual
@@ -36,6 +41,7 @@ class LossSettings(NamedTuple):
     gae_lambda: float
     reward_scaling: float
     regime: str  # "ours" or "authors"
+    entropy_draw: str  # "reparameterised" or "detached"
 
 
 class Unroll(NamedTuple):
@@ -87,6 +93,18 @@ def masked_mean(x: jnp.ndarray, mask: jnp.ndarray) -> jnp.ndarray:
     return jnp.sum(x * mask) / jnp.maximum(jnp.sum(mask), 1.0)
 
 
+def entropy_estimate(
+    loc: jnp.ndarray, scale: jnp.ndarray, key: jax.Array, draw: str
+) -> jnp.ndarray:
+    """One-draw estimate of the squashed action's entropy (nats), summed over the last axis
+    of ``loc``, ``scale`` (..., act): at u = loc + scale * eps, eps from ``key``;
+    ``draw="detached"`` passes no gradient through u (the authors' ``torch.normal``)."""
+    u = loc + scale * standard_normal(key, loc.shape)
+    if draw == "detached":
+        u = jax.lax.stop_gradient(u)
+    return tanh_gaussian_entropy(scale, u)
+
+
 def ppo_loss(
     params: Params,
     data: Unroll,
@@ -126,8 +144,9 @@ def ppo_loss(
     policy_loss = -masked_mean(jnp.minimum(ratio * adv, clipped * adv), data.valid)
     value_loss = 0.5 * masked_mean((values[:, :-1] - target) ** 2, data.valid)
     k_entropy, k_actor, k_critic = jax.random.split(key, 3)
-    u = loc + scale * standard_normal(k_entropy, loc.shape)  # reparameterised, for the entropy
-    entropy = masked_mean(tanh_gaussian_entropy(scale, u), data.valid)
+    entropy = masked_mean(
+        entropy_estimate(loc, scale, k_entropy, settings.entropy_draw), data.valid
+    )
     kl = agent.actor.kl(params.actor, k_actor) + agent.critic.kl(params.critic, k_critic)
     total = (
         policy_loss

@@ -28,6 +28,7 @@ from sgb.rl.population import check_actor_params, check_normalizer, population_r
 from sgb.rl.trainer import StepSettings, TrainState, make_trainer, strong
 
 REGIMES = ("ours", "authors")
+ENTROPY_DRAWS = ("reparameterised", "detached")
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,8 @@ class PPOConfig:
     under the authors' an iteration collects ``unrolls_per_iteration`` unrolls of every
     environment (1 under ours), and an evaluation is their window return
     (``Trainer.window_return``) over ``eval_individuals`` environments, each step a new draw.
+    ``entropy_draw`` is how the loss draws the entropy's action (``sgb.rl.losses``);
+    ``eval_at_start`` evaluates the initial parameters too, at step 0, as the authors do.
     """
 
     env: EnvSpec = field(default_factory=EnvSpec)
@@ -60,6 +63,8 @@ class PPOConfig:
     eval_individuals: int = 32
     regime: str = "ours"
     unrolls_per_iteration: int = 1
+    entropy_draw: str = "reparameterised"
+    eval_at_start: bool = False
 
     def __post_init__(self) -> None:
         validation.instance("env", self.env, EnvSpec)
@@ -84,6 +89,8 @@ class PPOConfig:
         for name in ("value_coef", "entropy_coef", "kl_coef"):
             validation.non_negative(name, getattr(self, name))
         validation.choice("regime", self.regime, REGIMES)
+        validation.choice("entropy_draw", self.entropy_draw, ENTROPY_DRAWS)
+        validation.instance("eval_at_start", self.eval_at_start, bool)
         if self.regime == "ours" and self.unrolls_per_iteration != 1:
             raise ValueError("our regime collects one unroll per iteration")
         sequences = self.num_envs * self.unrolls_per_iteration
@@ -245,8 +252,9 @@ def train(
     label: str = "PPO",
     initial: Start | None = None,
 ) -> TrainResult:
-    """Train with PPO; evaluates ``num_evals`` times, the last one after the final update.
-    With ``initial`` the run starts from its actor and normalizer (``init_state``).
+    """Train with PPO; evaluates ``num_evals`` times, the last one after the final update
+    (and first at step 0 with ``eval_at_start``). With ``initial`` the run starts from its
+    actor and normalizer (``init_state``).
 
     Runs ``num_evals`` chunks of ``iterations // num_evals`` iterations (so
     the steps trained are ``total_steps`` rounded down to a whole number of
@@ -289,6 +297,9 @@ def train(
     chunk = max(1, config.iterations // config.num_evals)
     first = done["chunks"]
     trainer = make_trainer(config.step_settings())
+    if config.eval_at_start and not done["eval_steps"]:
+        done["eval_steps"].append(0)
+        done["eval_returns"].append(evaluate(config, ts.params, ts.normalizer, seed + 9_999))
     for i in tqdm(
         range(first, config.num_evals),
         desc=label,

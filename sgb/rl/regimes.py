@@ -19,8 +19,9 @@ from sgb import validation
 from sgb.rl.ppo import PPOConfig
 
 SETTINGS = ("ours", "authors")
-# the typing ablation of chapter 5: each settings with the other's input typing
-ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs")
+# the typing ablation of chapter 5: each settings with the other's input typing; and the
+# authors' genome with their layers' aliased type pairs (``sgb.genome.aliased_table``)
+ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs", "authors_aliased")
 _ENVS = 2048
 _MINIBATCHES = 32
 # per environment: (batch_size, num_update_epochs, unroll_length, entropy_cost,
@@ -37,12 +38,14 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
     """``ppo`` under our genome settings (unchanged) or the authors' (their public code,
     ``RL/custom_layers.py``, ``RL/models.py``, ``RL/configs/*.yaml``): every layer an SGB
     layer, the observation entries and outputs typed too; type means drawn from N(0, 0.1);
-    rho_init -7 (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0 on the Ant, 1e-4 on
-    the HalfCheetah. The training regime is a separate choice (``authors_regime``).
+    every rho drawn from N(-7, 0.1^2) (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0
+    on the Ant, 1e-4 on the HalfCheetah. Every type pair has its own Gaussian, as the
+    paper describes. The training regime is a separate choice (``authors_regime``).
 
     The ablations swap one difference: ``"ours_typed_inputs"`` is ours with the
     observation entries typed, ``"authors_untyped_inputs"`` the authors' with one type
-    per observation entry.
+    per observation entry, ``"authors_aliased"`` the authors' with the type pairs their
+    RL layers alias (``RL/utils.py``: pair (a, b) reads entry (a + 1)(b + 1) - 1).
     """
     validation.choice("settings", settings, SETTINGS + ABLATIONS)
     if settings == "ours" or not ppo.network.sgb:
@@ -51,11 +54,13 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
         return replace(ppo, network=replace(ppo.network, typed_inputs=True))
     network = replace(
         ppo.network,
-        typed_inputs=settings == "authors",
+        typed_inputs=settings != "authors_untyped_inputs",
         sgb_output=True,
         mean_init=0.1,
         rho_init=-7.0,
+        rho_init_std=0.1,
         prior="gaussian",
+        aliased_pairs=settings == "authors_aliased",
     )
     return replace(ppo, network=network, kl_coef=0.0 if ppo.env.name == "ant" else 1e-4)
 
@@ -63,13 +68,21 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
 def authors_regime(ppo: PPOConfig) -> PPOConfig:
     """``ppo`` trained as the authors train: their regime, their PPO settings for its
     environment (learning rate 3e-4, clip 0.3, 2048 environments, 32 minibatches, 5 x 10^7
-    steps, and the rest of their yaml), evaluated ``num_evals`` = their
-    ``eval_frequency`` times, and an SGB network's biases drawn too. Its network, its
-    evaluation size (``eval_individuals``) and its episode length are kept."""
+    steps, and the rest of their yaml), an SGB network's biases drawn too, and where their
+    ``RL/models.py`` and ``RL/training_torch.py`` depart from ours, theirs:
+
+    - observations scaled by their normaliser (``sgb.rl.normalizer``, ``"authors"``);
+    - the entropy's draw passing no gradient (``entropy_draw="detached"``);
+    - deterministic layers started as torch's ``nn.Linear`` (``dense_init="torch"``);
+    - evaluated at step 0 and after each of their ``eval_frequency`` chunks
+      (``num_evals``), on as many environments as train (their ``eval_unroll`` on the
+      training ``env``).
+
+    Its network's shape and genome settings and its episode length are kept."""
     validation.instance("ppo", ppo, PPOConfig)
     validation.choice("env", ppo.env.name, tuple(_YAML))
     batch, epochs, unroll, entropy, kl, scaling, discount, evals = _YAML[ppo.env.name]
-    network = ppo.network
+    network = replace(ppo.network, normalizer="authors", dense_init="torch")
     if network.sgb:
         network = replace(network, bayesian_biases=True)
     return replace(
@@ -91,6 +104,9 @@ def authors_regime(ppo: PPOConfig) -> PPOConfig:
         gae_lambda=0.95,
         reward_scaling=scaling,
         num_evals=evals,
+        eval_individuals=_ENVS,
+        eval_at_start=True,
+        entropy_draw="detached",
     )
 
 

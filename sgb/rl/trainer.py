@@ -293,6 +293,16 @@ class Trainer:
         metrics = jax.tree_util.tree_map(jnp.mean, metrics)
         return ts._replace(params=params, opt_state=opt_state, key=key), metrics
 
+    def seen(self, data: Unroll) -> tuple[jnp.ndarray, jnp.ndarray]:
+        """The observations (S, T', obs) the normaliser counts from an iteration's data, and
+        their 0/1 weights (S, T'): the valid steps', or under the authors' convention every
+        unroll's T + 1, the bootstrap observation too, as their ``update_normalization``
+        counts ``td.observation`` (so each unroll's last is counted again as the next's first)."""
+        if self.settings.architecture.normalizer == "authors":
+            obs = jnp.concatenate([data.obs, data.last_obs[:, None]], axis=1)
+            return obs, jnp.ones(obs.shape[:-1])
+        return data.obs, data.valid
+
     @cached_property
     def iterations(self):
         """Jitted ``(ts, n) -> (ts, metrics)``: ``n`` PPO iterations (unroll, normaliser
@@ -305,7 +315,7 @@ class Trainer:
 
             def body(ts, _):
                 ts, data = self.collect(ts)
-                ts = ts._replace(normalizer=update(ts.normalizer, data.obs, data.valid))
+                ts = ts._replace(normalizer=update(ts.normalizer, *self.seen(data)))
                 return self.sgd(ts, data)
 
             ts, metrics = jax.lax.scan(body, ts, None, n)

@@ -1,0 +1,178 @@
+"""Where the time of the authors' regime goes: each phase of a training iteration against
+the bare simulator, on one pinned core with one XLA thread.
+
+At the regime's settings on the Ant (2048 environments, 32 unrolls of 5 steps an
+iteration, 4 epochs x 32 minibatches; ``sgb.rl.regimes.authors_regime``), for vanilla and
+for the authors' genome at 64 types, in interleaved rounds (one call of each phase a
+round, after a compiling call):
+
+- ``simulator``: the bare Brax Ant (``spring``) stepping every environment for an
+  iteration's steps with a fixed random policy (a linear map of the observation drawn once);
+- ``collection``: the regime's unrolls alone (``Trainer.collect``), no update;
+- ``update``: the 4 x 32 minibatch steps alone (``Trainer.sgd``) on a stored batch;
+- ``iteration``: whole iterations (``Trainer.iterations``: collection, normaliser, update);
+- ``evaluation``: one of the authors' evaluations (``Trainer.window_return`` on 2048
+  environments for 1000 steps), counted apart; a run makes ``num_evals + 1`` of them.
+
+Each phase is printed as env-steps/s (the environment steps an iteration trains on, per
+second) and as a ratio to the simulator's; the bound is collection and update measured
+apart, 1 / (1/collection + 1/update). The SGD's floating-point work per env step is
+XLA's cost analysis of the compiled update.
+
+Usage: ``python benchmarks/bench_regime.py [--core 0] [--rounds 2] [--iterations 2]
+[--out results/rl/bench_regime.json]`` (written with provenance). The process pins itself.
+"""
+
+import argparse
+import os
+import statistics
+import sys
+import time
+
+ONE_THREAD = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
+
+
+def _pin(core: int) -> None:
+    """This process on ``core`` with one XLA thread; before JAX is imported."""
+    if "jax" in sys.modules:
+        raise RuntimeError("pin before importing jax")
+    os.sched_setaffinity(0, {core})
+    os.environ["XLA_FLAGS"] = f"{os.environ.get('XLA_FLAGS', '')} {ONE_THREAD}".strip()
+
+
+def _timed(fn, *args) -> float:
+    """Seconds of one call of ``fn(*args)``, its outputs ready."""
+    import jax
+
+    start = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    return time.perf_counter() - start
+
+
+def phases(cell_types: int | None, iterations: int) -> dict:
+    """The phases of one configuration, each a ``(function, args, env_steps)``, and the
+    SGD's flops per env step."""
+    from dataclasses import replace
+
+    import jax
+
+    from sgb.experiments.regime import PROFILES, RegimeRun, run_config
+    from sgb.rl.ppo import init_state
+    from sgb.rl.trainer import make_trainer
+
+    config = run_config(PROFILES["cpu"], RegimeRun(cell_types, 0))
+    trainer = make_trainer(config.step_settings())
+    ts = trainer.restart_all(init_state(config, seed=0))
+    steps = config.steps_per_iteration
+    env, e = trainer.env, config.num_envs
+    t = config.unroll_length * config.unrolls_per_iteration
+    mix = jax.random.normal(jax.random.PRNGKey(1), (env.observation_size, env.action_size))
+
+    @jax.jit
+    def simulate(state):
+        def step(state, _):
+            return jax.vmap(env.step)(state, jax.numpy.tanh(state.obs @ mix)), None
+
+        return jax.lax.scan(step, state, None, t)[0]
+
+    collect = jax.jit(trainer.collect)
+    _, data = collect(ts)
+    sgd = jax.jit(trainer.sgd)
+    flops = sgd.lower(ts, data).compile().cost_analysis()
+    flops = flops[0] if isinstance(flops, list) else flops
+    evaluation = replace(config, eval_individuals=e)
+    return {
+        "simulator": (simulate, (ts.env_state,), steps),
+        "collection": (collect, (ts,), steps),
+        "update": (sgd, (ts, data), steps),
+        "iteration": (lambda ts: trainer.iterations(ts, iterations), (ts,), iterations * steps),
+        "evaluation": (
+            lambda ts: trainer.window_return(
+                ts.params, ts.normalizer, jax.random.PRNGKey(2), evaluation.eval_individuals
+            ),
+            (ts,),
+            evaluation.eval_individuals * config.episode_length,
+        ),
+        "sgd_flops_per_env_step": flops.get("flops", float("nan")) / steps,
+        "evals_per_run": config.num_evals + int(config.eval_at_start),
+        "iterations_per_run": config.iterations // config.num_evals * config.num_evals,
+        "steps_per_iteration": steps,
+    }
+
+
+def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
+    """Median env-steps/s of every phase over ``rounds`` interleaved rounds, their ratios
+    to the simulator, the bound and the share of a run's time its evaluations take."""
+    measured = phases(cell_types, iterations)
+    names = ("simulator", "collection", "update", "iteration", "evaluation")
+    for name in names:  # compile
+        fn, args, _ = measured[name]
+        _timed(fn, *args)
+    seconds = {name: [] for name in names}
+    for _ in range(rounds):
+        for name in names:
+            fn, args, _ = measured[name]
+            seconds[name].append(_timed(fn, *args))
+    rate = {n: measured[n][2] / statistics.median(seconds[n]) for n in names}
+    bound = 1.0 / (1.0 / rate["collection"] + 1.0 / rate["update"])
+    train_s = measured["iterations_per_run"] * measured["steps_per_iteration"] / rate["iteration"]
+    eval_s = measured["evals_per_run"] * measured["evaluation"][2] / rate["evaluation"]
+    return {
+        "cell_types": cell_types,
+        "env_steps_per_s": rate,
+        "ratio_to_simulator": {n: rate[n] / rate["simulator"] for n in names},
+        "seconds": seconds,
+        "bound_env_steps_per_s": bound,
+        "iteration_over_bound": rate["iteration"] / bound,
+        "bound_over_simulator": bound / rate["simulator"],
+        "sgd_flops_per_env_step": measured["sgd_flops_per_env_step"],
+        "run_hours": {"training": train_s / 3600, "evaluations": eval_s / 3600},
+    }
+
+
+def table(rows: list[dict]) -> str:
+    """The results as a text table: env-steps/s and the ratio to the simulator."""
+    lines = [f"{'phase':<12}" + "".join(f"{_name(r):>24}" for r in rows)]
+    for phase in ("simulator", "collection", "update", "iteration", "evaluation"):
+        cells = [
+            f"{r['env_steps_per_s'][phase]:>14,.0f} ({r['ratio_to_simulator'][phase]:.2f}x)"
+            for r in rows
+        ]
+        lines.append(f"{phase:<12}" + "".join(f"{c:>24}" for c in cells))
+    lines.append(
+        f"{'bound':<12}"
+        + "".join(
+            f"{r['bound_env_steps_per_s']:>14,.0f} ({r['bound_over_simulator']:.2f}x)" for r in rows
+        )
+    )
+    for key, fmt in (("iteration_over_bound", "{:.3f}"), ("sgd_flops_per_env_step", "{:,.0f}")):
+        lines.append(f"{key:<12}" + "".join(f"{fmt.format(r[key]):>24}" for r in rows))
+    for part in ("training", "evaluations"):
+        hours = "".join(f"{r['run_hours'][part]:>23.2f}h" for r in rows)
+        lines.append(f"{'run ' + part:<12}" + hours)
+    return "\n".join(lines)
+
+
+def _name(row: dict) -> str:
+    return "vanilla" if row["cell_types"] is None else f"{row['cell_types']} types"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--core", type=int, default=0)
+    parser.add_argument("--rounds", type=int, default=2)
+    parser.add_argument("--iterations", type=int, default=2)
+    parser.add_argument("--out", default="results/rl/bench_regime.json")
+    args = parser.parse_args()
+    _pin(args.core)
+    start = time.perf_counter()
+    rows = [measure(k, args.rounds, args.iterations) for k in (None, 64)]
+    print(table(rows))
+    from sgb.provenance import provenance, write_results
+
+    record = provenance(vars(args), "cpu", [0], time.perf_counter() - start)
+    write_results(args.out, {"rows": rows, "table": table(rows).splitlines()}, record)
+
+
+if __name__ == "__main__":
+    main()
