@@ -9,6 +9,7 @@ from dataclasses import replace
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 from reach import SPEC, reach_config
 
 from sgb import genome
@@ -278,3 +279,39 @@ def test_the_authors_evaluate_at_step_0_and_after_every_chunk():
     assert np.all(np.isfinite(result.eval_returns))
     regime = authors_regime(PPOConfig())
     assert regime.eval_at_start and regime.eval_individuals == regime.num_envs == 2048
+
+
+def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path, monkeypatch):
+    """Its state file keeps no environment state (every chunk resets them from the kept
+    key), and the resumed run ends bit-identical to one never stopped."""
+    config = replace(
+        _authors(NetworkConfig(hidden=(8,)), total_steps=3 * 2 * 4 * 5 * 2), num_evals=3
+    )
+    uninterrupted = train(config, seed=1, progress=False)
+    trainer = make_trainer(config.step_settings())
+    real, calls = trainer.iterations, []
+
+    def killed_at_the_second_chunk(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    state_file = tmp_path / "run.state.npz"
+    monkeypatch.setitem(trainer.__dict__, "iterations", killed_at_the_second_chunk)
+    with pytest.raises(KeyboardInterrupt):
+        train(config, seed=1, progress=False, state_file=state_file)
+    monkeypatch.setitem(trainer.__dict__, "iterations", real)
+    ts = init_state(config, 1)
+    with np.load(state_file) as saved:
+        kept = len(saved.files) - 1  # one entry is the meta
+    env_leaves = len(jax.tree_util.tree_leaves((ts.env_state, ts.start_state)))
+    assert kept == len(jax.tree_util.tree_leaves(ts)) - env_leaves
+    resumed = train(config, seed=1, progress=False, state_file=state_file)
+    assert resumed.eval_returns == uninterrupted.eval_returns
+    for a, b in zip(
+        jax.tree_util.tree_leaves(resumed.params),
+        jax.tree_util.tree_leaves(uninterrupted.params),
+        strict=True,
+    ):
+        np.testing.assert_array_equal(a, b)

@@ -5,7 +5,8 @@ Every run is ``sgb.rl.regimes.authors_regime`` (their normaliser, entropy draw,
 initialisation and evaluation included), the SGB runs with the authors' genome
 (``sgb.rl.regimes.with_settings(..., "authors")``: a Gaussian per type pair, as the paper
 describes) and, as an ablation, with the type pairs their RL layers alias
-(``"authors_aliased"``). The vanilla network has the SGB's width, 128 (their
+(``"authors_aliased"``: ``RL/utils.py`` reads pair (a, b) at entry (a + 1)(b + 1) - 1,
+``sgb.genome.aliased_table``). The vanilla network has the SGB's width, 128 (their
 ``ant_vanilla.yaml`` has 64 and 10^8 steps), so that the comparison isolates the
 bottleneck at one budget. Each run is evaluated as the authors evaluate
 (``sgb.rl.trainer.Trainer.window_return`` on the 2048 training environments, at step 0
@@ -109,12 +110,16 @@ def regime_config(profile: str) -> RegimeRuns:
 
 
 def run_config(config: RegimeRuns, run: RegimeRun) -> PPOConfig:
-    """The settings of ``run``: the regime's network at its cell types, under its genome
-    settings for an SGB."""
+    """The settings of ``run``: the regime's network at its cell types, under the authors'
+    genome settings for an SGB, its type pairs aliased for an ``"authors_aliased"`` run."""
     sgb = run.cell_types is not None
     network = replace(config.ppo.network, cell_types=run.cell_types, bayesian_biases=sgb)
     ppo = replace(config.ppo, network=network)
-    return with_settings(ppo, run.genome) if sgb else ppo
+    if not sgb:
+        return ppo
+    ppo = with_settings(ppo, "authors")
+    aliased = run.genome == "authors_aliased"
+    return replace(ppo, network=replace(ppo.network, aliased_pairs=aliased))
 
 
 def checkpoint_name(run: RegimeRun, profile: str) -> str:

@@ -244,6 +244,15 @@ def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: in
     return float(np.mean(returns))
 
 
+def _kept(ts: TrainState, config: PPOConfig) -> TrainState:
+    """What a state file keeps of ``ts`` between chunks: all of it, or under the authors'
+    regime all but the environments' states, which every chunk resets (``restart_all``)
+    from the kept key; so the file is some kilobytes, not megabytes, and travels."""
+    if config.regime == "authors":
+        return ts._replace(env_state=None, start_state=None)
+    return ts
+
+
 def train(
     config: PPOConfig,
     seed: int = 0,
@@ -267,7 +276,8 @@ def train(
     started again, the run ends with the result of an uninterrupted one. The file is
     left in place (a finished one makes the call return at once); the caller removes it
     once the result is kept. A state file that is damaged, or holds parameters that are
-    not finite, is a ``sgb.validation.CorruptFile`` naming it. ``label`` names the run on
+    not finite, is a ``sgb.validation.CorruptFile`` naming it. Under the authors' regime it
+    does not hold the environments' states (``_kept``). ``label`` names the run on
     its progress bar. Training stops (``sgb.divergence.TrainingDiverged``) when the loss
     is not finite or its magnitude exceeds ``sgb.divergence.BLOWUP_FACTOR`` times that of
     the first one of this call. A state file is known by the run's config and seed only:
@@ -285,12 +295,17 @@ def train(
         "wall_time_s": 0.0,
     }
     if state_file is not None and Path(state_file).exists():
-        ts, done = resume.load(
+        kept, done = resume.load(
             state_file,
-            ts,
+            _kept(ts, config),
             run,
             progress_keys=tuple(done),
             finite=lambda ts: (ts.params, ts.normalizer),
+        )
+        ts = (
+            kept._replace(env_state=ts.env_state, start_state=ts.start_state)
+            if (config.regime == "authors")
+            else kept
         )
     holder = {"ts": ts}
     guard = _guard(holder)
@@ -319,7 +334,7 @@ def train(
         done["chunks"] = i + 1
         if state_file is not None:
             elapsed = done["wall_time_s"] + time.perf_counter() - start
-            resume.save(state_file, ts, run, {**done, "wall_time_s": elapsed})
+            resume.save(state_file, _kept(ts, config), run, {**done, "wall_time_s": elapsed})
     return TrainResult(
         config=config,
         params=ts.params,

@@ -19,9 +19,8 @@ from sgb import validation
 from sgb.rl.ppo import PPOConfig
 
 SETTINGS = ("ours", "authors")
-# the typing ablation of chapter 5: each settings with the other's input typing; and the
-# authors' genome with their layers' aliased type pairs (``sgb.genome.aliased_table``)
-ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs", "authors_aliased")
+# the typing ablation of chapter 5: each settings with the other's input typing
+ABLATIONS = ("ours_typed_inputs", "authors_untyped_inputs")
 _ENVS = 2048
 _MINIBATCHES = 32
 # per environment: (batch_size, num_update_epochs, unroll_length, entropy_cost,
@@ -38,14 +37,13 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
     """``ppo`` under our genome settings (unchanged) or the authors' (their public code,
     ``RL/custom_layers.py``, ``RL/models.py``, ``RL/configs/*.yaml``): every layer an SGB
     layer, the observation entries and outputs typed too; type means drawn from N(0, 0.1);
-    every rho drawn from N(-7, 0.1^2) (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0
-    on the Ant, 1e-4 on the HalfCheetah. Every type pair has its own Gaussian, as the
-    paper describes. The training regime is a separate choice (``authors_regime``).
+    rho_init -7 (sigma about 0.0009); prior N(0, 0.1^2); KL weight 0 on the Ant, 1e-4 on
+    the HalfCheetah. Every type pair has its own Gaussian, as the paper describes. The
+    training regime is a separate choice (``authors_regime``).
 
     The ablations swap one difference: ``"ours_typed_inputs"`` is ours with the
     observation entries typed, ``"authors_untyped_inputs"`` the authors' with one type
-    per observation entry, ``"authors_aliased"`` the authors' with the type pairs their
-    RL layers alias (``RL/utils.py``: pair (a, b) reads entry (a + 1)(b + 1) - 1).
+    per observation entry.
     """
     validation.choice("settings", settings, SETTINGS + ABLATIONS)
     if settings == "ours" or not ppo.network.sgb:
@@ -54,13 +52,11 @@ def with_settings(ppo: PPOConfig, settings: str) -> PPOConfig:
         return replace(ppo, network=replace(ppo.network, typed_inputs=True))
     network = replace(
         ppo.network,
-        typed_inputs=settings != "authors_untyped_inputs",
+        typed_inputs=settings == "authors",
         sgb_output=True,
         mean_init=0.1,
         rho_init=-7.0,
-        rho_init_std=0.1,
         prior="gaussian",
-        aliased_pairs=settings == "authors_aliased",
     )
     return replace(ppo, network=network, kl_coef=0.0 if ppo.env.name == "ant" else 1e-4)
 
@@ -73,7 +69,9 @@ def authors_regime(ppo: PPOConfig) -> PPOConfig:
 
     - observations scaled by their normaliser (``sgb.rl.normalizer``, ``"authors"``);
     - the entropy's draw passing no gradient (``entropy_draw="detached"``);
-    - deterministic layers started as torch's ``nn.Linear`` (``dense_init="torch"``);
+    - deterministic layers started as torch's ``nn.Linear`` (``dense_init="torch"``), and
+      an SGB layer's every rho drawn from N(rho_init, 0.1^2) (``RL/custom_layers.py``),
+      not set to rho_init;
     - evaluated at step 0 and after each of their ``eval_frequency`` chunks
       (``num_evals``), on as many environments as train (their ``eval_unroll`` on the
       training ``env``).
@@ -82,7 +80,7 @@ def authors_regime(ppo: PPOConfig) -> PPOConfig:
     validation.instance("ppo", ppo, PPOConfig)
     validation.choice("env", ppo.env.name, tuple(_YAML))
     batch, epochs, unroll, entropy, kl, scaling, discount, evals = _YAML[ppo.env.name]
-    network = replace(ppo.network, normalizer="authors", dense_init="torch")
+    network = replace(ppo.network, normalizer="authors", dense_init="torch", rho_init_std=0.1)
     if network.sgb:
         network = replace(network, bayesian_biases=True)
     return replace(
