@@ -17,7 +17,11 @@ round, after a compiling call):
 Each phase is printed as env-steps/s (the environment steps an iteration trains on, per
 second) and as a ratio to the simulator's; the bound is collection and update measured
 apart, 1 / (1/collection + 1/update). The SGD's floating-point work per env step is
-XLA's cost analysis of the compiled update.
+XLA's cost analysis of one minibatch's loss gradient times the epochs x minibatches (the
+cost analysis of the whole update counts its loop body once); ``update_gflops`` is that
+work at the update's measured rate, beside ``matmul_gflops``, the core's rate on a plain
+float32 matrix product of the minibatch's shape (rows x 128 by 128 x 128, 64 in a chain),
+about the most the update's dense layers could reach.
 
 Usage: ``python benchmarks/bench_regime.py [--core 0] [--rounds 2] [--iterations 2]
 [--out results/rl/bench_regime.json]`` (written with provenance). The process pins itself.
@@ -57,6 +61,7 @@ def phases(cell_types: int | None, iterations: int) -> dict:
     import jax
 
     from sgb.experiments.regime import PROFILES, RegimeRun, run_config
+    from sgb.rl.losses import ppo_loss
     from sgb.rl.ppo import init_state
     from sgb.rl.trainer import make_trainer
 
@@ -78,8 +83,19 @@ def phases(cell_types: int | None, iterations: int) -> dict:
     collect = jax.jit(trainer.collect)
     _, data = collect(ts)
     sgd = jax.jit(trainer.sgd)
-    flops = sgd.lower(ts, data).compile().cost_analysis()
-    flops = flops[0] if isinstance(flops, list) else flops
+    rows = config.num_envs * config.unrolls_per_iteration // config.num_minibatches
+    minibatch = jax.tree_util.tree_map(lambda x: x[:rows], data)
+    grad = jax.jit(
+        jax.grad(
+            lambda p: ppo_loss(
+                p, minibatch, ts.normalizer, ts.key, trainer.agent, config.step_settings().loss
+            )[0]
+        )
+    )
+    flops = _flops(grad, ts.params) * config.num_epochs * config.num_minibatches
+    a = jax.random.normal(jax.random.PRNGKey(3), (rows, 128))
+    b = jax.random.normal(jax.random.PRNGKey(4), (128, 128))
+    matmul = jax.jit(lambda a, b: jax.lax.fori_loop(0, 64, lambda _, x: jax.numpy.tanh(x @ b), a))
     evaluation = replace(config, eval_individuals=e)
     return {
         "simulator": (simulate, (ts.env_state,), steps),
@@ -93,18 +109,25 @@ def phases(cell_types: int | None, iterations: int) -> dict:
             (ts,),
             evaluation.eval_individuals * config.episode_length,
         ),
-        "sgd_flops_per_env_step": flops.get("flops", float("nan")) / steps,
+        "matmul": (matmul, (a, b), 64 * 2 * rows * 128 * 128),
+        "sgd_flops_per_env_step": flops / steps,
         "evals_per_run": config.num_evals + int(config.eval_at_start),
         "iterations_per_run": config.iterations // config.num_evals * config.num_evals,
         "steps_per_iteration": steps,
     }
 
 
+def _flops(fn, *args) -> float:
+    """XLA's count of the floating-point operations of one call of jitted ``fn``."""
+    cost = fn.lower(*args).compile().cost_analysis()
+    return (cost[0] if isinstance(cost, list) else cost)["flops"]
+
+
 def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
     """Median env-steps/s of every phase over ``rounds`` interleaved rounds, their ratios
     to the simulator, the bound and the share of a run's time its evaluations take."""
     measured = phases(cell_types, iterations)
-    names = ("simulator", "collection", "update", "iteration", "evaluation")
+    names = ("simulator", "collection", "update", "iteration", "evaluation", "matmul")
     for name in names:  # compile
         fn, args, _ = measured[name]
         _timed(fn, *args)
@@ -114,6 +137,8 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
             fn, args, _ = measured[name]
             seconds[name].append(_timed(fn, *args))
     rate = {n: measured[n][2] / statistics.median(seconds[n]) for n in names}
+    matmul_gflops = rate.pop("matmul") / 1e9
+    names = names[:-1]
     bound = 1.0 / (1.0 / rate["collection"] + 1.0 / rate["update"])
     train_s = measured["iterations_per_run"] * measured["steps_per_iteration"] / rate["iteration"]
     eval_s = measured["evals_per_run"] * measured["evaluation"][2] / rate["evaluation"]
@@ -126,6 +151,8 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
         "iteration_over_bound": rate["iteration"] / bound,
         "bound_over_simulator": bound / rate["simulator"],
         "sgd_flops_per_env_step": measured["sgd_flops_per_env_step"],
+        "update_gflops": measured["sgd_flops_per_env_step"] * rate["update"] / 1e9,
+        "matmul_gflops": matmul_gflops,
         "run_hours": {"training": train_s / 3600, "evaluations": eval_s / 3600},
     }
 
@@ -145,7 +172,9 @@ def table(rows: list[dict]) -> str:
             f"{r['bound_env_steps_per_s']:>14,.0f} ({r['bound_over_simulator']:.2f}x)" for r in rows
         )
     )
-    for key, fmt in (("iteration_over_bound", "{:.3f}"), ("sgd_flops_per_env_step", "{:,.0f}")):
+    formats = {"iteration_over_bound": "{:.3f}", "sgd_flops_per_env_step": "{:,.0f}"}
+    formats |= {"update_gflops": "{:.1f}", "matmul_gflops": "{:.1f}"}
+    for key, fmt in formats.items():
         lines.append(f"{key:<12}" + "".join(f"{fmt.format(r[key]):>24}" for r in rows))
     for part in ("training", "evaluations"):
         hours = "".join(f"{r['run_hours'][part]:>23.2f}h" for r in rows)
