@@ -11,6 +11,7 @@ direction. Where the paper gives a direction but no number, the effect used to j
 contradiction and to size the budget is stated in the row (``paper_effect_basis``).
 """
 
+import functools
 import math
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -21,8 +22,8 @@ from scipy import stats as scipy_stats
 
 from sgb import stats, verdicts
 from sgb.experiments.dgb_full import figure2_records
-from sgb.provenance import read_results
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.results import load as load_results
 
 # what each claim's test estimates, by key prefix
 EFFECTS = {
@@ -313,18 +314,18 @@ def crossover_row(
     decide = "" if verdict != verdicts.INCONCLUSIVE else "see the two sides' rows"
     crossing = stats.bootstrap_crossing(sgb, dgb)
     seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
-    test = verdicts.Test(
-        "t bootstrap of the first crossing",
-        crossing.estimate,
-        crossing.low,
-        crossing.high,
-        math.nan,
-        math.nan,
-        math.nan,
-        seeds,
-    )
-    if math.isnan(crossing.estimate):
-        test = None  # the mean curves do not cross: no crossing to put an interval on
+    test = None  # where the mean curves do not cross: no crossing to put an interval on
+    if not math.isnan(crossing.estimate):
+        test = verdicts.Test(
+            "t bootstrap of the first crossing",
+            crossing.estimate,
+            crossing.low,
+            crossing.high,
+            math.nan,
+            math.nan,
+            math.nan,
+            seeds,
+        )
     return Row(
         key,
         "Figure 2",
@@ -985,28 +986,25 @@ _READ_WHOLE = (
 
 def scorecard(results_dir: Path) -> list[Row]:
     """Every claim whose results are committed under ``results_dir``, then the claims no
-    run here can test."""
-    results_dir = Path(results_dir)
+    run here can test. Each file is read through ``sgb.results.load``, which refuses one
+    it cannot trust (a ``CorruptFile`` naming it)."""
+    load = functools.partial(load_results, results_dir=results_dir, missing_ok=True)
     rows: list[Row] = []
-    fig2 = results_dir / "fig2_fashion-mnist_cpu.json"
-    if fig2.exists():
-        f2 = figure2_rows(read_results(fig2)["results"], "Fashion-MNIST")
-        rows += f2 + [figure2_crossover(f2, read_results(fig2)["results"], "Fashion-MNIST")]
-    sgb_full = results_dir / "sgb_full_fashion-mnist_cpu.json"
-    dgb_full = results_dir / "dgb_full_fashion-mnist_cpu.json"
-    if sgb_full.exists() and dgb_full.exists():
-        dgb_payload = read_results(dgb_full)
-        rounds = dgb_payload["provenance"]["config"]["dgb"]["rounds"]
-        sgb_results = read_results(sgb_full)["results"]
-        full = figure2_full_rows(sgb_results, dgb_payload["results"], rounds, "Fashion-MNIST")
-        cross = figure2_full_crossover(
-            full, sgb_results, dgb_payload["results"], rounds, "Fashion-MNIST"
-        )
+    fig2 = load("fig2_fashion-mnist_cpu.json")
+    if fig2 is not None:
+        f2 = figure2_rows(fig2["results"], "Fashion-MNIST")
+        rows += f2 + [figure2_crossover(f2, fig2["results"], "Fashion-MNIST")]
+    sgb_full = load("sgb_full_fashion-mnist_cpu.json")
+    dgb_full = load("dgb_full_fashion-mnist_cpu.json")
+    if sgb_full is not None and dgb_full is not None:
+        rounds = dgb_full["provenance"]["config"]["dgb"]["rounds"]
+        sgb_results, dgb_results = sgb_full["results"], dgb_full["results"]
+        full = figure2_full_rows(sgb_results, dgb_results, rounds, "Fashion-MNIST")
+        cross = figure2_full_crossover(full, sgb_results, dgb_results, rounds, "Fashion-MNIST")
         rows += full + ([cross] if cross else [])
     for env in ("ant", "halfcheetah"):
-        path = results_dir / "rl" / f"fig3_{env}_cpu.json"
-        if path.exists():
-            payload = read_results(path)
+        payload = load(f"rl/fig3_{env}_cpu.json")
+        if payload is not None:
             steps = payload["provenance"]["config"]["ppo"]["total_steps"]
             if _trained(payload["results"]):
                 rows += figure3_rows(payload["results"], env, steps)
@@ -1014,12 +1012,13 @@ def scorecard(results_dir: Path) -> list[Row]:
                     rows += typing_rows(payload["results"], steps)
             else:
                 rows.append(untrained_row(env, steps))
-    fig4 = results_dir / "rl" / "fig4_ant_cpu.json"
-    if fig4.exists():
-        rows += figure4_rows(read_results(fig4)["results"]["returns"])
+    fig4 = load("rl/fig4_ant_cpu.json")
+    if fig4 is not None:
+        rows += figure4_rows(fig4["results"]["returns"])
     for name, rows_of in _READ_WHOLE:
-        if (results_dir / name).exists():
-            rows += rows_of(read_results(results_dir / name)["results"])
+        payload = load(name)
+        if payload is not None:
+            rows += rows_of(payload["results"])
     rows += [
         untestable(
             "fig4f.r_terrain",

@@ -34,7 +34,8 @@ class EvolutionConfig:
     (even), each scored by ``individuals`` developed networks on ``batch_size`` training
     examples, for ``generations``; perturbations of SD ``es_sigma`` (table units), Adam at
     ``learning_rate`` on the mean genome. Means start as the layers initialise them, rho at
-    ``rho_init``."""
+    ``rho_init``, below ``sgb.genome.SOFTPLUS_LIMIT``: above it the spread softplus(rho)
+    saturates, fitness no longer changes with rho, and evolution could not bring it back."""
 
     hidden: int = 32
     cell_types: tuple[int | None, int, int | None] = (8, 8, None)
@@ -53,6 +54,12 @@ class EvolutionConfig:
         for name in ("hidden", "candidates", "individuals", "generations", "batch_size"):
             validation.integer(name, getattr(self, name))
         validation.integer("eval_individuals", self.eval_individuals)
+        validation.instance("stochastic", self.stochastic, bool)
+        if validation.real("rho_init", self.rho_init) >= genome.SOFTPLUS_LIMIT:
+            raise ValueError(
+                f"rho_init must be < {genome.SOFTPLUS_LIMIT}, where the spread saturates, "
+                f"got {self.rho_init!r}"
+            )
         if self.candidates % 2:
             raise ValueError(f"candidates must be even (antithetic pairs), got {self.candidates}")
         validation.positive("es_sigma", self.es_sigma)

@@ -73,20 +73,62 @@ def sigma(layer: LayerGenome) -> jnp.ndarray:
 def of_params(params: dict) -> Genome:
     """Every SGB layer's genome in a Flax ``{"params": ...}`` tree, keyed by the layer's
     path ("SGBDense_0", "hidden_1", "Encoder/SGBDense_0"), input to output."""
-    return {path: LayerGenome(g["mu"], g["rho"]) for path, g in _genome_nodes(params["params"])}
+    tree = _params_tree(params)
+    return {path: LayerGenome(g["mu"], g["rho"]) for path, g in _genome_nodes(tree)}
 
 
 def with_tables(params: dict, genome: Genome) -> dict:
     """A copy of the Flax ``{"params": ...}`` tree ``params`` whose layers at the paths of
-    ``genome`` hold its tables (``of_params``'s inverse)."""
-    out = {"params": dict(params["params"])}
-    for path, layer in genome.items():
+    ``genome`` hold its tables (``of_params``'s inverse). Each layer's ``mu`` and ``rho``
+    share a shape, that of the tables they replace where the layer has a genome already;
+    a layer without one gets it."""
+    out = {"params": dict(_params_tree(params))}
+    for path, layer in _layers(genome).items():
         node = out["params"]
         for key in filter(None, path.split("/")):  # "": a lone layer, at the root
             node[key] = dict(node.get(key, {}))
             node = node[key]
+        _check_tables(f"genome[{path!r}]", layer, node.get("genome"))
         node["genome"] = {"mu": layer.mu, "rho": layer.rho}
     return out
+
+
+def _params_tree(params: dict) -> Mapping:
+    """The tree under ``"params"`` of a Flax ``{"params": ...}`` tree; a ``TypeError``
+    naming ``params`` for anything else."""
+    if not isinstance(params, Mapping) or not isinstance(params.get("params"), Mapping):
+        got = f"keys {sorted(map(str, params))}" if isinstance(params, Mapping) else params
+        raise TypeError(f"params must be a Flax tree {{'params': {{...}}}}, got {got!s:.200}")
+    return params["params"]
+
+
+def _layers(genome: Genome, wanted: Mapping | None = None, by: str = "") -> Genome:
+    """The layers of ``genome`` named by the keys of ``wanted`` (the argument called
+    ``by``; all of them when ``None``), once ``genome`` is checked to be a mapping that
+    holds each of them as a ``LayerGenome``."""
+    validation.instance("genome", genome, Mapping)
+    names = list(genome if wanted is None else wanted)
+    for name in names:
+        if name not in genome:
+            raise ValueError(f"genome has no layer {name!r} of {by}; its layers: {list(genome)}")
+        if not isinstance(genome[name], LayerGenome):
+            kind = type(genome[name]).__name__
+            raise TypeError(f"genome[{name!r}] must be a LayerGenome, got a {kind}")
+    return {name: genome[name] for name in names}
+
+
+def _check_tables(name: str, layer: LayerGenome, stored: Mapping | None) -> None:
+    """``layer``'s ``mu`` and ``rho`` are arrays of one shape, that of the ``stored``
+    genome's tables when there is one."""
+    mu = validation.array(f"{name}.mu", layer.mu, min_ndim=1)
+    rho = validation.array(f"{name}.rho", layer.rho)
+    expected = tuple(mu.shape) if stored is None else tuple(np.shape(stored["mu"]))
+    whose = "mu's shape" if stored is None else "the shape of the tables it replaces,"
+    for field, table in (("mu", mu), ("rho", rho)):
+        if tuple(table.shape) != expected:
+            raise ValueError(
+                f"{name}.{field} must have {whose} {expected}, got {tuple(table.shape)}"
+            )
 
 
 def aliased_table(table: jnp.ndarray) -> jnp.ndarray:
@@ -143,12 +185,14 @@ def draw_noise(key: jax.Array, shapes: Shapes) -> Noise:
 def kernels(genome: Genome, noise: Noise) -> dict[str, jnp.ndarray]:
     """The individuals' kernels of the layers in ``noise``, each ``individual_kernel`` of
     its layer's genome: shape of the noise, (..., n_in, n_out), leading axes individuals."""
-    return {name: individual_kernel(*genome[name], n) for name, n in noise.items()}
+    layers = _layers(genome, noise, "noise")
+    return {name: individual_kernel(*layers[name], n) for name, n in noise.items()}
 
 
 def mean_kernels(genome: Genome, shapes: Shapes) -> dict[str, jnp.ndarray]:
     """The mean network's kernels: each type mean expanded to its block of ``shapes``."""
-    return {name: expand_table(genome[name].mu, shape) for name, shape in shapes.items()}
+    layers = _layers(genome, shapes, "shapes")
+    return {name: expand_table(layers[name].mu, shape) for name, shape in shapes.items()}
 
 
 def kl(
@@ -156,11 +200,13 @@ def kl(
 ) -> jnp.ndarray:
     """The genome's KL to ``prior``, a scalar (nats): ``layer_kl`` summed over the layers
     of ``shapes``, each with its key of ``jax.random.split(key, len(shapes))``; 0 for none."""
+    layers = _layers(genome, shapes, "shapes")
+    validation.prng_key("key", key)
     if not shapes:
         return jnp.zeros(())
     keys = jax.random.split(key, len(shapes))
     return sum(
-        layer_kl(prior, genome[name].mu, sigma(genome[name]), shape, counting, k)
+        layer_kl(prior, layers[name].mu, sigma(layers[name]), shape, counting, k)
         for (name, shape), k in zip(shapes.items(), keys, strict=True)
     )
 

@@ -22,7 +22,9 @@ from sgb import validation
 
 
 def _returns(returns) -> np.ndarray:
-    array = validation.array("returns", returns, ndim=3)
+    """``returns`` (C, N, E) as float64; every score refuses an empty or non-finite one, so
+    that none of them is NaN or counts a NaN as a failure."""
+    array = validation.finite_array("returns", returns, ndim=3)
     return np.asarray(array, dtype=np.float64)
 
 

@@ -3,6 +3,7 @@
 import dataclasses
 import datetime
 import functools
+import hashlib
 import importlib.metadata
 import json
 import math
@@ -126,18 +127,37 @@ def provenance(config: Any, profile: str, seeds: list[int], wall_time_s: float) 
 SAME_RUN_FIELDS = ("config", "profile", "seeds")
 
 
+CHECKSUM = "payload_sha256"
+
+
+def payload_digest(payload: dict[str, Any]) -> str:
+    """The sha256 (hex) of ``payload`` as canonical JSON (sorted keys, no spaces), leaving
+    out its provenance's own ``CHECKSUM``: what a run writes into the provenance of its
+    results file, and what a reader recomputes from the file's parsed contents."""
+    record = {k: v for k, v in payload["provenance"].items() if k != CHECKSUM}
+    canonical = {"provenance": record, "results": payload.get("results")}
+    text = json.dumps(canonical, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def write_results(path: str | Path, results: dict[str, Any], record: dict[str, Any]) -> Path:
     """Write ``{"provenance": record, "results": results}`` as strict JSON (non-finite
-    numbers as ``null``), atomically; returns the path.
+    numbers as ``null``), atomically, with the payload's ``payload_digest`` in its
+    provenance (``CHECKSUM``); returns the path. A file written into the committed results
+    is entered into their manifest (``sgb.manifest.record``).
 
     A file that already holds these results, of the same config, profile and seeds, is
     left as it is: a rerun that reused finished runs, or came out the same, does not
     replace the provenance of the run that made them (its commit, date and wall time)."""
+    from sgb import manifest
+
     payload = {"provenance": _jsonable(record), "results": _jsonable(results)}
+    payload["provenance"][CHECKSUM] = payload_digest(payload)
     text = json.dumps(payload, indent=1, sort_keys=False, allow_nan=False) + "\n"
-    if _holds_the_same(path, json.loads(text)):
-        return Path(path)
-    return atomic_write(path, text.encode())
+    if not _holds_the_same(path, json.loads(text)):
+        atomic_write(path, text.encode())
+    manifest.record(path)
+    return Path(path)
 
 
 def _holds_the_same(path: str | Path, payload: dict[str, Any]) -> bool:
@@ -151,26 +171,65 @@ def _holds_the_same(path: str | Path, payload: dict[str, Any]) -> bool:
     return all(before.get(key) == now.get(key) for key in SAME_RUN_FIELDS)
 
 
-def read_results(path: str | Path) -> dict[str, Any]:
-    """Read a results file written by ``write_results``; a file that is not JSON raises
-    ``sgb.validation.CorruptFile`` naming it."""
+def _finite(text: str) -> float:
+    """A JSON number as a float; NaN, Infinity and numbers beyond a float's range (such as
+    1e999) are not strict JSON, and no run writes them."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"{text} is not a finite number")
+    return value
+
+
+def read_results(path: str | Path, remedy: str | None = None) -> Any:
+    """Read a results file written by ``write_results``; a directory or a file that is not
+    strict JSON raises ``sgb.validation.CorruptFile`` naming it, with ``remedy`` (default:
+    run afresh). Its shape and checksum are checked by the readers that rely on them
+    (``sgb.results.load``, ``earlier_results``)."""
     from sgb.validation import RESTART, CorruptFile
 
+    def corrupt(problem: str) -> CorruptFile:
+        return CorruptFile(path, problem, remedy or RESTART, "results file")
+
     try:
-        payload = json.loads(Path(path).read_text())
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise CorruptFile(
-            path, f"is not a results file ({error})", RESTART, "results file"
-        ) from error
-    return payload
+        return json.loads(Path(path).read_bytes(), parse_float=_finite, parse_constant=_finite)
+    except IsADirectoryError as error:
+        raise corrupt("is a directory, not a results file") from error
+    except (UnicodeDecodeError, ValueError) as error:
+        raise corrupt(f"is not a results file ({error})") from error
+
+
+def verify_checksum(path: str | Path, payload: Any, remedy: str) -> None:
+    """Refuse ``payload``, read from results file ``path``, if its provenance carries a
+    ``CHECKSUM`` that its contents no longer match (an edit after its run wrote it): a
+    ``sgb.validation.CorruptFile`` naming the file, with ``remedy``. A file written before
+    runs embedded the checksum carries none."""
+    from sgb.validation import CorruptFile
+
+    record = payload.get("provenance") if isinstance(payload, dict) else None
+    written = record.get(CHECKSUM) if isinstance(record, dict) else None
+    if written is not None and written != payload_digest(payload):
+        problem = f"is not as its run wrote it: its contents do not match its {CHECKSUM}"
+        raise CorruptFile(path, problem, remedy, "results file")
 
 
 def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
     """The results an earlier run of ``config`` left in ``path`` (empty if there is no file),
-    so that a rerun continues it; a ValueError if a run of another config wrote the file."""
+    so that a rerun continues it; a ValueError if a run of another config wrote the file, a
+    ``sgb.validation.CorruptFile`` if it is not a results file with a config or, in the
+    committed results, not the file its run wrote (``sgb.manifest.verify``)."""
+    from sgb import manifest
+    from sgb.validation import RESTART, CorruptFile
+
     if not Path(path).exists():
         return {}
     payload = read_results(path)
+    manifest.verify(path)
+    for part in ("provenance", "results"):
+        if not isinstance(payload, dict) or not isinstance(payload.get(part), dict):
+            problem = f'has no "{part}" object, so is not a results file'
+            raise CorruptFile(path, problem, RESTART, "results file")
+    if "config" not in payload["provenance"]:
+        raise CorruptFile(path, "has no config in its provenance", RESTART, "results file")
     if payload["provenance"]["config"] != json.loads(json.dumps(_jsonable(config))):
         raise ValueError(f"{path} holds results of another config; move it away to run this one")
     return payload["results"]

@@ -17,8 +17,9 @@ Intervals come from F = MSB / MSW, distributed F(N - 1, N (k - 1)) times
 import math
 from typing import NamedTuple
 
-import numpy as np
 from scipy import stats as scipy_stats
+
+from sgb import validation
 
 
 class VarianceSplit(NamedTuple):
@@ -37,50 +38,69 @@ class VarianceSplit(NamedTuple):
 
 
 def variance_split(returns, level: float = 0.95) -> VarianceSplit:
-    """One-way random-effects split of ``returns`` (N, k), N >= 2, k >= 2."""
-    x = np.asarray(returns, dtype=np.float64)
-    if x.ndim != 2 or min(x.shape) < 2 or not np.all(np.isfinite(x)):
-        raise ValueError(f"returns must be a finite (N, k) array, N and k >= 2; got {x.shape}")
+    """One-way random-effects split of ``returns`` (N, k), N >= 2, k >= 2, with intervals
+    at ``level`` in (0, 1). The individuals' means must differ and so must the episodes of
+    at least one individual (else F is 0 or infinite)."""
+    x = validation.real_array("returns", returns, ndim=2)
+    if min(x.shape) < 2:
+        raise ValueError(f"returns must have N >= 2 individuals and k >= 2 episodes, got {x.shape}")
+    level = validation.fraction("level", level)
     n, k = x.shape
     means = x.mean(axis=1)
     msb = k * means.var(ddof=1)
     msw = ((x - means[:, None]) ** 2).sum() / (n * (k - 1))
     if msw <= 0:
-        raise ValueError("every individual's episodes are identical: the split is undefined")
-    f = msb / msw
+        raise ValueError("returns: every individual's episodes are identical, so F is infinite")
+    if msb <= 0:
+        raise ValueError("returns: every individual has the same mean, so F is 0")
+    f = float(msb / msw)
     df1, df2 = n - 1, n * (k - 1)
     upper = scipy_stats.f.ppf(0.5 + level / 2, df1, df2)
     lower = scipy_stats.f.ppf(0.5 - level / 2, df1, df2)
     f_low, f_high = f / upper, f / lower
 
     def icc_of(value: float) -> float:
-        return (value - 1) / (value + k - 1)
+        return float((value - 1) / (value + k - 1))
+
+    def reliability_of(value: float) -> float:
+        return float(1 - 1 / value)
 
     return VarianceSplit(
         n_individuals=n,
         episodes=k,
-        between_var=max(0.0, (msb - msw) / k),
+        between_var=float(max(0.0, (msb - msw) / k)),
         within_var=float(msw),
         icc=icc_of(f),
         icc_ci=(icc_of(f_low), icc_of(f_high)),
-        reliability=1 - 1 / f,
-        reliability_ci=(1 - 1 / f_low, 1 - 1 / f_high),
-        f=float(f),
+        reliability=reliability_of(f),
+        reliability_ci=(reliability_of(f_low), reliability_of(f_high)),
+        f=f,
         p=float(scipy_stats.f.sf(f, df1, df2)),
     )
 
 
-def projected_reliability(icc: float, episodes: int) -> float:
-    """Spearman-Brown: the reliability of an ``episodes``-episode mean from a one-episode
-    ``icc``."""
-    return episodes * icc / (1 + (episodes - 1) * icc)
+def _icc(name: str, icc: float) -> float:
+    """A one-episode intraclass correlation: a real number in [-1, 1]."""
+    return validation.in_range(name, icc, -1.0, 1.0)
+
+
+def projected_reliability(icc: float, episodes: float) -> float:
+    """Spearman-Brown: the reliability of an ``episodes``-episode mean (episodes > 0) from a
+    one-episode ``icc`` in [-1, 1], where 1 + (episodes - 1) icc > 0."""
+    icc, episodes = _icc("icc", icc), validation.positive("episodes", episodes)
+    scale = 1 + (episodes - 1) * icc
+    if scale <= 0:
+        raise ValueError(
+            f"icc {icc!r} is too negative for {episodes!r} episodes: 1 + (m - 1) icc <= 0"
+        )
+    return episodes * icc / scale
 
 
 def episodes_for(icc: float, target: float = 0.8) -> float:
-    """Episodes per individual whose mean reaches reliability ``target`` (Spearman-Brown);
-    ``inf`` when the individuals do not differ (``icc <= 0``)."""
-    if not 0 < target < 1:
-        raise ValueError(f"target must lie in (0, 1), got {target}")
+    """Episodes per individual whose mean reaches reliability ``target`` in (0, 1)
+    (Spearman-Brown) from a one-episode ``icc`` in [-1, 1]; ``inf`` when the individuals do
+    not differ (``icc <= 0``)."""
+    icc, target = _icc("icc", icc), validation.fraction("target", target)
     if icc <= 0:
         return math.inf
     return target * (1 - icc) / (icc * (1 - target))
@@ -88,8 +108,12 @@ def episodes_for(icc: float, target: float = 0.8) -> float:
 
 def between_sd_bound(split: VarianceSplit) -> float:
     """An upper bound on the SD between individuals, from the upper end of the ICC's
-    interval: sigma_b^2 <= icc_high / (1 - icc_high) * sigma_w^2."""
-    icc_high = split.icc_ci[1]
+    interval (below 1): sigma_b^2 <= icc_high / (1 - icc_high) * sigma_w^2."""
+    validation.instance("split", split, VarianceSplit)
+    icc_high = _icc("split.icc_ci[1]", split.icc_ci[1])
+    within = validation.non_negative("split.within_var", split.within_var)
+    if icc_high == 1:
+        raise ValueError("split.icc_ci[1] must be below 1: at 1 the bound is infinite")
     if icc_high <= 0:
         return 0.0
-    return math.sqrt(icc_high / (1 - icc_high) * split.within_var)
+    return math.sqrt(icc_high / (1 - icc_high) * within)

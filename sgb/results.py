@@ -4,6 +4,10 @@
 ``sgb.paths.committed_results()``), e.g. ``"rl/fig3_ant_cpu.json"``. Each table is a
 ``pandas.DataFrame`` with one row per run, cell or record and the file's values
 unchanged (returns in reward units, accuracies as fractions, times in seconds).
+
+``load`` is the one door: it refuses (``sgb.validation.CorruptFile``, naming the file) a
+file that is not a results file, that is not as its run wrote it (``sgb.provenance``'s
+checksum, ``sgb.manifest``), or that does not parse under its schema (``sgb.schemas``).
 """
 
 from pathlib import Path
@@ -12,8 +16,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from sgb import manifest, schemas
 from sgb.paths import committed_results
-from sgb.provenance import read_results
+from sgb.provenance import read_results, verify_checksum
 
 Payload = dict[str, Any]  # a results file: {"results": ..., "provenance": ...}
 
@@ -26,14 +31,22 @@ def path(name: str, results_dir: str | Path | None = None) -> Path:
 def load(
     name: str, results_dir: str | Path | None = None, missing_ok: bool = False
 ) -> Payload | None:
-    """The payload of results file ``name``; ``None`` if it is absent and ``missing_ok``,
-    else ``FileNotFoundError`` naming it."""
-    file = path(name, results_dir)
-    if file.exists():
-        return read_results(file)
-    if missing_ok:
-        return None
-    raise FileNotFoundError(f"no results file {file}: run `python -m sgb reproduce` for it")
+    """The payload of results file ``name``, once it is checked: strict JSON, matching the
+    checksum its run embedded (``sgb.provenance.verify_checksum``), its entry in the
+    manifest of ``results_dir`` (``sgb.manifest.verify``) and its schema
+    (``sgb.schemas.check``), else a ``CorruptFile`` naming it. ``None`` if it is absent and
+    ``missing_ok``, else ``FileNotFoundError`` naming it."""
+    root = Path(committed_results() if results_dir is None else results_dir)
+    file = root / name
+    if not file.exists():
+        if missing_ok:
+            return None
+        raise FileNotFoundError(f"no results file {file}: run `python -m sgb reproduce` for it")
+    payload = read_results(file, schemas.REWRITE)
+    verify_checksum(file, payload, schemas.REWRITE)
+    manifest.verify(file, root)
+    schemas.check(name, payload, file)
+    return payload
 
 
 def _duration(seconds: float) -> str:

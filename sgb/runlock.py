@@ -6,43 +6,68 @@ yields whether it got it; ``exclusive(path)`` waits for it (for a read-modify-wr
 file that several processes update, such as a sweep's results file). The operating
 system releases a lock when its process ends, killed or not, so a run left by a dead
 process is free for the next one to resume.
+
+``path`` is a ``str`` or an ``os.PathLike``, anything else a ``TypeError``. Locks do not
+nest: taking the lock of a path inside a ``with`` block that holds it (``claim`` or
+``exclusive``, in the same thread) is a ``RuntimeError``, where it would otherwise
+deadlock (``exclusive``) or report the lock as another's (``claim``). Another thread of
+the process is refused it, or waits for it, as another process is.
 """
 
 import fcntl
 import os
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from sgb import validation
 
-def _open(path: str | Path) -> int:
-    lock = Path(f"{path}.lock")
-    lock.parent.mkdir(parents=True, exist_ok=True)
-    return os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+_held = threading.local()  # .files: (device, inode) of each lock file this thread holds
+
+
+def _held_files() -> set[tuple[int, int]]:
+    if not hasattr(_held, "files"):
+        _held.files = set()
+    return _held.files
 
 
 @contextmanager
-def claim(path: str | Path) -> Iterator[bool]:
-    """Hold the lock of ``path`` for the ``with`` block if no other process holds it;
-    yields ``True`` if this process holds it, ``False`` if another does."""
-    fd = _open(path)
+def _locked(path: str | os.PathLike, blocking: bool) -> Iterator[bool]:
+    """Open the lock file of ``path`` and ``flock`` it; yield whether it is held. A
+    ``RuntimeError`` if this thread holds it already."""
+    lock = Path(f"{os.fspath(validation.path('path', path))}.lock")
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
+        stat = os.fstat(fd)
+        identity = (stat.st_dev, stat.st_ino)
+        if identity in _held_files():
+            raise RuntimeError(f"this thread already holds the lock {lock}; locks do not nest")
         try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(fd, fcntl.LOCK_EX if blocking else fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             yield False
             return
-        yield True
+        _held_files().add(identity)
+        try:
+            yield True
+        finally:
+            _held_files().discard(identity)
     finally:
         os.close(fd)
 
 
 @contextmanager
-def exclusive(path: str | Path) -> Iterator[None]:
+def claim(path: str | os.PathLike) -> Iterator[bool]:
+    """Hold the lock of ``path`` for the ``with`` block if no other process holds it;
+    yields ``True`` if this process holds it, ``False`` if another does."""
+    with _locked(path, blocking=False) as mine:
+        yield mine
+
+
+@contextmanager
+def exclusive(path: str | os.PathLike) -> Iterator[None]:
     """Hold the lock of ``path`` for the ``with`` block, waiting while another process does."""
-    fd = _open(path)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
+    with _locked(path, blocking=True):
         yield
-    finally:
-        os.close(fd)

@@ -85,6 +85,7 @@ class ClassifierConfig:
         validation.real("rho_init", self.rho_init)
         validation.integer("num_samples", self.num_samples)
         validation.integer("eval_individuals", self.eval_individuals)
+        validation.instance("local_reparam", self.local_reparam, bool)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -103,10 +104,12 @@ class DenseConfig:
 
 
 def make_model(
-    config: ClassifierConfig, num_classes: int, input_shape: tuple[int, ...] | None = None
+    config: ClassifierConfig, num_classes: int, input_shape: tuple[int, ...]
 ) -> nn.Module:
     """The SGB classifier a config describes (an ``SGBMLP`` without conv layers), for
-    examples of ``input_shape`` (checked on every call when given)."""
+    examples of ``input_shape`` (one example's, no batch axis), checked on every call: a
+    layer's genome is a type table, whose shape does not tell the input width it was
+    made for."""
     validation.instance("config", config, ClassifierConfig)
     return sgb_classifier(
         (*config.hidden, validation.integer("num_classes", num_classes)),
@@ -115,7 +118,7 @@ def make_model(
         config.kl_counting,
         config.rho_init,
         config.conv_features,
-        input_shape,
+        validation.integers("input_shape", input_shape),
     )
 
 

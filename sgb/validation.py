@@ -6,6 +6,7 @@ work starts, with a message that says which argument is wrong and why.
 
 import math
 import numbers
+import os
 from collections.abc import Collection, Sequence
 from typing import Any
 
@@ -36,6 +37,16 @@ def integers(name: str, values: Any, minimum: int = 1, *, allow_none: bool = Fal
     )
 
 
+def distinct(name: str, values: Sequence[Any]) -> tuple:
+    """``values`` as a tuple if no entry repeats; else a ``ValueError`` naming the repeats."""
+    values = tuple(values)
+    repeated = sorted({repr(v) for i, v in enumerate(values) if v in values[:i]})
+    if repeated:
+        repeats = ", ".join(repeated)
+        raise ValueError(f"{name} must not repeat an entry, got {values!r} ({repeats} repeated)")
+    return values
+
+
 def real(name: str, value: Any) -> float:
     """``value`` as a finite float: a non-number is a ``TypeError``, nan or inf a ``ValueError``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
@@ -43,6 +54,15 @@ def real(name: str, value: Any) -> float:
     if not math.isfinite(value):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return float(value)
+
+
+def reals(name: str, values: Any) -> tuple[float, ...]:
+    """A non-empty sequence of finite real numbers, as a tuple of floats."""
+    if isinstance(values, str | bytes) or not isinstance(values, Sequence):
+        raise TypeError(f"{name} must be a sequence of real numbers, got {values!r}")
+    if len(values) == 0:
+        raise ValueError(f"{name} must not be empty")
+    return tuple(real(f"{name}[{i}]", v) for i, v in enumerate(values))
 
 
 def positive(name: str, value: Any) -> float:
@@ -70,6 +90,14 @@ def in_range(name: str, value: Any, low: float, high: float, *, low_open: bool =
     return value
 
 
+def fraction(name: str, value: Any) -> float:
+    """A finite real number strictly between 0 and 1 (a confidence level, a target)."""
+    value = real(name, value)
+    if not 0 < value < 1:
+        raise ValueError(f"{name} must lie in (0, 1), got {value!r}")
+    return value
+
+
 def choice(name: str, value: Any, options: Collection[Any]) -> Any:
     """One of ``options``."""
     if not isinstance(value, str | int | type(None)) or value not in options:
@@ -83,6 +111,15 @@ def instance(name: str, value: Any, types: type | tuple[type, ...]) -> Any:
         options = types if isinstance(types, tuple) else (types,)
         expected = " or ".join(t.__name__ for t in options)
         raise TypeError(f"{name} must be a {expected}, got {value!r}")
+    return value
+
+
+def path(name: str, value: Any) -> str | os.PathLike:
+    """A file system path: a non-empty ``str`` or an ``os.PathLike`` (``pathlib.Path``)."""
+    if not isinstance(value, str | os.PathLike):
+        raise TypeError(f"{name} must be a path (str or os.PathLike), got {value!r}")
+    if not os.fspath(value):
+        raise ValueError(f"{name} must not be empty")
     return value
 
 
@@ -146,6 +183,30 @@ def finite_array(name: str, value: Any, *, allow_empty: bool = False, **shape: i
     return value
 
 
+def real_array(name: str, value: Any, **shape: int) -> np.ndarray:
+    """``finite_array`` of real numbers, as a float64 numpy array (no tracers: statistics
+    of concrete values)."""
+    value = np.asarray(finite_array(name, value, **shape))
+    if value.dtype.kind == "c":
+        raise TypeError(f"{name} must hold real numbers, got dtype {value.dtype}")
+    return value.astype(np.float64)
+
+
+def sample(name: str, value: Any, minimum: int = 2) -> np.ndarray:
+    """A 1-D sample of at least ``minimum`` finite real numbers, as a float64 array."""
+    value = real_array(name, value, ndim=1)
+    if value.size < minimum:
+        raise ValueError(f"{name} needs at least {minimum} values, got {value.size}")
+    return value
+
+
+def varying(name: str, value: np.ndarray) -> np.ndarray:
+    """``value`` unless all its entries are equal: a constant sample has no spread."""
+    if np.all(value == value.flat[0]):
+        raise ValueError(f"{name} is constant, so the statistic is undefined")
+    return value
+
+
 def labels(name: str, value: Any, num_classes: int | None = None) -> Any:
     """Integer class labels, in [0, ``num_classes``) when it is given (a tracer is checked
     only for its dtype)."""
@@ -170,6 +231,22 @@ def prng_key(name: str, value: Any) -> Any:
     if shape is None or np.dtype(value.dtype) != np.uint32 or not shape or shape[-1] != 2:
         raise TypeError(f"{name} must be a jax PRNG key (jax.random.key), got {value!r}")
     return value
+
+
+def shape_differences(
+    tree: Any, expected: Any, limit: int = 4
+) -> list[tuple[str, tuple[int, ...] | None, tuple[int, ...] | None]]:
+    """The first ``limit`` leaves, by path, whose shapes differ between the pytree ``tree``
+    and ``expected`` (arrays or ``jax.ShapeDtypeStruct``, e.g. from ``jax.eval_shape``):
+    (leaf path, its shape in ``tree``, in ``expected``), ``None`` where a side lacks it."""
+
+    def shapes(t: Any) -> dict[str, tuple[int, ...]]:
+        leaves = jax.tree_util.tree_leaves_with_path(t)
+        return {jax.tree_util.keystr(k): tuple(np.shape(v)) for k, v in leaves}
+
+    got, want = shapes(tree), shapes(expected)
+    differing = sorted(k for k in got.keys() | want.keys() if got.get(k) != want.get(k))
+    return [(k, got.get(k), want.get(k)) for k in differing[:limit]]
 
 
 def finite_tree(name: str, tree: Any) -> Any:

@@ -33,11 +33,7 @@ NOT_TESTABLE = "not testable here"
 VERDICTS = (REPRODUCED, CONTRADICTED, INCONCLUSIVE, NOT_TESTABLE)
 
 
-class Test(NamedTuple):
-    """One test: its name, the effect estimated, its 95 % interval (low, high), degrees of
-    freedom (``inf`` for a normal approximation), two-sided p against the null, the
-    effect detectable at 80 % power, and the sample size ``n`` per group."""
-
+class _Fields(NamedTuple):
     name: str
     estimate: float
     low: float
@@ -48,17 +44,56 @@ class Test(NamedTuple):
     n: int
 
 
-def _sample(name: str, values) -> np.ndarray:
-    array = np.asarray(values, dtype=np.float64)
-    if array.ndim != 1 or array.size < 2 or not np.all(np.isfinite(array)):
-        raise ValueError(f"{name} must be a 1-D sequence of at least 2 finite numbers")
-    return array
+class Test(_Fields):
+    """One test: its name, the effect estimated, its 95 % interval (low, high), degrees of
+    freedom (``inf`` for a normal approximation), two-sided p against the null, the
+    effect detectable at 80 % power, and the sample size ``n`` per group.
+
+    The estimate and the interval must be finite, with low <= high; dof, p and the
+    detectable effect may be ``nan`` where the test has none (a bootstrap interval), else
+    dof > 0, p in [0, 1] and detectable > 0."""
+
+    __slots__ = ()
+
+    def __new__(cls, *args, **kwargs) -> "Test":
+        t = _Fields(*args, **kwargs)
+        low, high = validation.real("low", t.low), validation.real("high", t.high)
+        if low > high:
+            raise ValueError(f"low must be <= high, got the interval ({low!r}, {high!r})")
+        return super().__new__(
+            cls,
+            validation.instance("name", t.name, str),
+            validation.real("estimate", t.estimate),
+            low,
+            high,
+            _unless_nan(_dof, "dof", t.dof),
+            _unless_nan(validation.in_range, "p", t.p, 0.0, 1.0),
+            _unless_nan(validation.positive, "detectable", t.detectable),
+            validation.integer("n", t.n),
+        )
+
+    @classmethod
+    def _make(cls, iterable) -> "Test":
+        return cls(*iterable)
+
+
+def _unless_nan(check, name: str, value, *args) -> float:
+    """``check(name, value, *args)``, or nan where ``value`` is nan (none for this test)."""
+    if isinstance(value, float | np.floating) and math.isnan(value):
+        return math.nan
+    return check(name, value, *args)
+
+
+def _dof(name: str, value) -> float:
+    """Degrees of freedom as given (an int stays one): a real number > 0, or ``inf``."""
+    if value != math.inf:
+        validation.positive(name, value)
+    return value
 
 
 def _t_test(name: str, estimate: float, se: float, dof: float, n: int, null: float) -> Test:
     """A t (or, for ``dof=inf``, z) test of ``estimate`` with standard error ``se``."""
-    if not se > 0:
-        raise ValueError(f"{name}: the standard error must be positive, got {se}")
+    se = validation.positive("the standard error", se)
     dist = scipy_stats.norm if math.isinf(dof) else scipy_stats.t(dof)
     half = dist.ppf(0.5 + LEVEL / 2) * se
     detectable = (dist.ppf(0.5 + LEVEL / 2) + dist.ppf(POWER)) * se
@@ -68,60 +103,85 @@ def _t_test(name: str, estimate: float, se: float, dof: float, n: int, null: flo
 
 def welch(a, b) -> Test:
     """Welch's t for mean(a) - mean(b) of two independent samples (Welch-Satterthwaite
-    degrees of freedom); ``n`` is the smaller sample's size."""
-    a, b = _sample("a", a), _sample("b", b)
+    degrees of freedom), not both constant; ``n`` is the smaller sample's size."""
+    a, b = validation.sample("a", a), validation.sample("b", b)
+    if np.ptp(a) == 0 and np.ptp(b) == 0:
+        raise ValueError("a and b are both constant, so the statistic is undefined")
     va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
     dof = (va + vb) ** 2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1))
     return _t_test("Welch t", a.mean() - b.mean(), math.sqrt(va + vb), dof, min(a.size, b.size), 0)
 
 
 def paired(a, b) -> Test:
-    """Paired t for mean(a - b) (same units measured twice); dof = n - 1."""
-    a, b = _sample("a", a), _sample("b", b)
+    """Paired t for mean(a - b) (same units measured twice, a - b not constant); dof = n - 1."""
+    a, b = validation.sample("a", a), validation.sample("b", b)
     if a.shape != b.shape:
         raise ValueError(f"a and b must have the same length, got {a.size} and {b.size}")
-    d = a - b
+    d = validation.varying("a - b", a - b)
     return _t_test("paired t", d.mean(), d.std(ddof=1) / math.sqrt(d.size), d.size - 1, d.size, 0)
 
 
 def one_sample(values, null: float) -> Test:
-    """One-sample t of mean(values) against a fixed ``null``; dof = n - 1."""
-    v = _sample("values", values)
+    """One-sample t of mean(values) (not constant) against a fixed ``null``; dof = n - 1."""
+    v = validation.varying("values", validation.sample("values", values))
+    null = validation.real("null", null)
     se = v.std(ddof=1) / math.sqrt(v.size)
-    return _t_test("one-sample t", v.mean(), se, v.size - 1, v.size, validation.real("null", null))
+    return _t_test("one-sample t", v.mean(), se, v.size - 1, v.size, null)
 
 
 def estimate_test(name: str, estimate: float, stderr: float, n: int) -> Test:
     """A z test of a Monte Carlo estimate with its standard error (normal approximation)."""
-    return _t_test(name, float(estimate), float(stderr), math.inf, n, 0)
+    estimate, stderr = validation.real("estimate", estimate), validation.positive("stderr", stderr)
+    return _t_test(validation.instance("name", name, str), estimate, stderr, math.inf, n, 0)
 
 
 def fisher_r(x, y) -> Test:
-    """Pearson's r with its Fisher-z interval; detectable: the r that a test of r = 0 finds
-    with 80 % power at this n; dof = n - 2."""
-    x, y = _sample("x", x), _sample("y", y)
-    if x.shape != y.shape or x.size < 4:
-        raise ValueError("x and y must have the same length, at least 4")
+    """Pearson's r of two samples of the same length, at least 4, neither constant nor
+    the one a linear function of the other; ``fisher_from_r``."""
+    x, y = validation.sample("x", x, minimum=4), validation.sample("y", y, minimum=4)
+    if x.shape != y.shape:
+        raise ValueError(f"x and y must have the same length, got {x.size} and {y.size}")
+    validation.varying("x", x), validation.varying("y", y)
     r = float(np.corrcoef(x, y)[0, 1])
-    return fisher_from_r(r, x.size)
+    if abs(r) == 1:
+        raise ValueError(f"x and y are perfectly correlated (r = {r}): Fisher's z is infinite")
+    return _fisher(r, x.size)
 
 
 def fisher_from_r(r: float, n: int) -> Test:
-    """``fisher_r`` from a correlation ``r`` of ``n`` pairs."""
-    z, se = math.atanh(max(min(r, 1 - 1e-12), -1 + 1e-12)), 1 / math.sqrt(n - 3)
+    """Pearson's r of ``n`` >= 4 pairs, -1 < r < 1, with its Fisher-z interval; detectable:
+    the r that a test of r = 0 finds with 80 % power at this n; dof = n - 2."""
+    r = validation.real("r", r)
+    if not -1 < r < 1:
+        raise ValueError(f"r must lie in (-1, 1) (Fisher's z is infinite at +-1), got {r!r}")
+    return _fisher(r, validation.integer("n", n, minimum=4))
+
+
+def _fisher(r: float, n: int) -> Test:
+    z, se = math.atanh(r), 1 / math.sqrt(n - 3)
     crit = scipy_stats.norm.ppf(0.5 + LEVEL / 2)
     detectable = math.tanh((crit + scipy_stats.norm.ppf(POWER)) * se)
-    t = r * math.sqrt((n - 2) / max(1 - r * r, 1e-300))
-    p = float(2 * scipy_stats.t.sf(abs(t), n - 2))
+    p = float(2 * scipy_stats.t.sf(abs(r) * math.sqrt((n - 2) / (1 - r * r)), n - 2))
     return Test(
         "Fisher z", r, math.tanh(z - crit * se), math.tanh(z + crit * se), n - 2, p, detectable, n
     )
 
 
+def _effect(test: Test, paper: float, null: float) -> tuple[float, float]:
+    """``paper`` and ``null`` checked against ``test``: finite, and apart (the rule needs
+    the paper's side of the null)."""
+    validation.instance("test", test, Test)
+    paper, null = validation.real("paper", paper), validation.real("null", null)
+    if paper == null:
+        raise ValueError(f"paper must differ from null ({null!r}): an effect of none has no side")
+    return paper, null
+
+
 def verdict(test: Test, paper: float, null: float = 0.0) -> str:
-    """The rule of the module docstring."""
-    side = math.copysign(1.0, paper - null)
-    if (side > 0 and test.low > null) or (side < 0 and test.high < null):
+    """The rule of the module docstring: ``REPRODUCED``, ``CONTRADICTED`` or
+    ``INCONCLUSIVE``."""
+    paper, null = _effect(test, paper, null)
+    if (paper > null and test.low > null) or (paper < null and test.high < null):
         return REPRODUCED
     if not test.low <= paper <= test.high:
         return CONTRADICTED
@@ -130,26 +190,45 @@ def verdict(test: Test, paper: float, null: float = 0.0) -> str:
 
 def paper_inside(test: Test, paper: float) -> bool:
     """Whether the paper's effect lies inside the test's interval."""
-    return test.low <= paper <= test.high
+    validation.instance("test", test, Test)
+    return test.low <= validation.real("paper", paper) <= test.high
 
 
 def units_to_decide(test: Test, paper: float, null: float = 0.0) -> int:
     """The sample size (per group, in the test's units) at which the detectable effect
-    equals the paper's, scaling the standard error as 1/sqrt(n) (for r, through Fisher's z)."""
+    equals the paper's, scaling the standard error as 1/sqrt(n) (for r, through Fisher's
+    z, where the paper's r must lie in (-1, 1))."""
+    paper, null = _effect(test, paper, null)
     effect = abs(paper - null)
-    if effect == 0:
-        raise ValueError("the paper's effect equals the null: no sample size decides it")
     if test.name == "Fisher z":
+        if effect >= 1:
+            raise ValueError(f"paper must be a correlation in (-1, 1), got {paper!r}")
         crit = scipy_stats.norm.ppf(0.5 + LEVEL / 2) + scipy_stats.norm.ppf(POWER)
-        return math.ceil((crit / math.atanh(min(effect, 1 - 1e-12))) ** 2 + 3)
-    return math.ceil(test.n * (test.detectable / effect) ** 2)
+        units = _squared(crit / math.atanh(effect)) + 3
+    elif math.isnan(test.detectable):
+        raise ValueError(f"test has no detectable effect to scale ({test.name})")
+    else:
+        units = test.n * _squared(test.detectable / effect)
+    if not math.isfinite(units):
+        raise ValueError(f"no finite sample size detects paper = {paper!r} with this test")
+    return math.ceil(units)
+
+
+def _squared(x: float) -> float:
+    """``x * x``, ``inf`` where it overflows (``x ** 2`` raises there)."""
+    return x * x
 
 
 def power_at(test: Test, effect: float) -> float:
     """The power of ``test``'s design to detect a true ``effect`` (two-sided 5 %), at its
-    standard error and degrees of freedom."""
+    standard error and degrees of freedom (the test must have both: dof, and an interval
+    of positive width)."""
+    validation.instance("test", test, Test)
+    effect = validation.real("effect", effect)
+    if math.isnan(test.dof) or test.low == test.high:
+        raise ValueError(f"test needs a dof and an interval of some width, got {test!r}")
     dist = scipy_stats.norm if math.isinf(test.dof) else scipy_stats.t(test.dof)
-    crit = dist.ppf(0.5 + LEVEL / 2)
+    crit = float(dist.ppf(0.5 + LEVEL / 2))
     se = (test.high - test.low) / (2 * crit)
     shift = abs(effect) / se
     return float(dist.sf(crit - shift) + dist.cdf(-crit - shift))

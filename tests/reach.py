@@ -22,7 +22,8 @@ SHARED_STEP = pytest.mark.xdist_group("reach_sgb_step")
 class Reach(Env):
     """A point on a line moves by 0.1 * action per step towards a random target.
 
-    obs = (position, target - position); reward = -|target - position|.
+    obs = (position, target - position); reward = -|target - position|; its one metric,
+    ``x_velocity``, is the step's move, 0.1 * action (as Brax's bodies report theirs).
     Standing still earns about -32 * E|d| = -21 per episode; an optimal agent about -3.
     """
 
@@ -32,13 +33,14 @@ class Reach(Env):
     def reset(self, rng: jax.Array) -> State:
         pos, target = jax.random.uniform(rng, (2,), minval=-1.0, maxval=1.0)
         obs = jnp.array([pos, target - pos])
-        return State(None, obs, jnp.zeros(()), jnp.zeros(()), {}, {})
+        return State(None, obs, jnp.zeros(()), jnp.zeros(()), {"x_velocity": jnp.zeros(())}, {})
 
     def step(self, state: State, action: jax.Array) -> State:
         pos = state.obs[0] + 0.1 * action[0]
         target = state.obs[0] + state.obs[1]
         obs = jnp.array([pos, target - pos])
-        return state.replace(obs=obs, reward=-jnp.abs(target - pos))
+        metrics = {"x_velocity": 0.1 * action[0]}
+        return state.replace(obs=obs, reward=-jnp.abs(target - pos), metrics=metrics)
 
     @property
     def observation_size(self) -> int:

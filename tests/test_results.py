@@ -2,12 +2,14 @@
 
 import json
 import math
+import shutil
 
 import pytest
 
-from sgb import results
+from sgb import claims, manifest, results, schemas
 from sgb.experiments import dgb_full
 from sgb.paths import committed_results
+from sgb.validation import CorruptFile
 
 
 def raw(name: str) -> dict:
@@ -21,6 +23,49 @@ def test_load_reads_the_committed_file_and_names_a_missing_one(tmp_path):
     assert results.load("absent.json", tmp_path, missing_ok=True) is None
     with pytest.raises(FileNotFoundError, match="absent.json"):
         results.load("absent.json", tmp_path)
+
+
+def _committed_files() -> list[str]:
+    """The names of every results file under the committed results that the manifest keeps."""
+    root = committed_results()
+    names = (p.relative_to(root).as_posix() for p in root.rglob("*.json"))
+    return sorted(n for n in names if manifest.covers(n))
+
+
+def test_every_committed_results_file_matches_the_manifest_and_its_schema():
+    """What the book's build reads: every file is in the manifest as its run wrote it (and
+    the manifest names no other), and parses under its schema."""
+    names = _committed_files()
+    assert len(names) >= 20 and "rl/bench_rl.json" in names
+    assert sorted(manifest.entries(committed_results())) == names
+    for name in names:
+        assert results.load(name) == raw(name)
+    with pytest.raises(ValueError, match="no schemas in sgb.schemas cover"):
+        schemas.schema_of("rl/unknown_ant_cpu.json")
+
+
+def test_the_manifest_refuses_a_one_number_edit_of_a_committed_file(tmp_path):
+    """A copy of the committed Figure 5 file and the manifest reads as the committed one;
+    one return changed by hand (to 1e308, which swings a verdict) and it is refused, by name."""
+    shutil.copy(committed_results() / manifest.NAME, tmp_path)
+    (tmp_path / "rl").mkdir()
+    copy = tmp_path / "rl" / "fig5_ant_cpu.json"
+    shutil.copy(committed_results() / "rl" / "fig5_ant_cpu.json", copy)
+    assert [r.key for r in claims.scorecard(tmp_path)][:2] == ["fig5.population_beats_mean"] * 2
+    payload = raw("rl/fig5_ant_cpu.json")
+    first = payload["results"]["authors_protocol"]["individuals"][0][0]
+    text = copy.read_text()
+    assert text.count(repr(first)) == 1
+    copy.write_text(text.replace(repr(first), "1e308"))
+    with pytest.raises(CorruptFile, match="differs from its entry in") as error:
+        claims.scorecard(tmp_path)
+    assert error.value.path == copy
+    assert "fig5_ant_cpu.json" in str(error.value) and "--maintainer-write-committed" in str(
+        error.value
+    )
+    (tmp_path / manifest.NAME).unlink()  # a directory without a manifest: the schema refuses it
+    with pytest.raises(CorruptFile, match=r"individuals\[0\]\[0\] = 1e\+308, where a finite"):
+        claims.scorecard(tmp_path)
 
 
 def test_provenance_line_names_profile_seeds_commits_date_and_wall_time():

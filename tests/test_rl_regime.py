@@ -14,10 +14,11 @@ from reach import SPEC, reach_config
 
 from sgb import genome
 from sgb.celltypes import assign_cell_types, expand_table
+from sgb.experiments import regime_gait
 from sgb.rl.agent import Network, NetworkConfig, Params, tanh_gaussian_log_prob
 from sgb.rl.losses import entropy_estimate
 from sgb.rl.normalizer import init_normalizer, normalize, update
-from sgb.rl.ppo import PPOConfig, init_state, train
+from sgb.rl.ppo import PPOConfig, init_state, initial_params, train
 from sgb.rl.regimes import authors_regime, with_settings
 from sgb.rl.trainer import make_trainer
 
@@ -315,3 +316,29 @@ def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path
         strict=True,
     ):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("direction", [1.0, -1.0])
+def test_the_window_gait_plays_the_window_of_the_return_and_measures_its_velocity(
+    direction, monkeypatch
+):
+    """On the same key the gait's return is the evaluation's, bit for bit; an actor pushed
+    to act +-1 everywhere moves the reach point 0.1 a step each way, so its velocity is
+    +-0.1 in every environment, and it walks where the walking speed is below that."""
+    config = _authors(NetworkConfig(hidden=(8,)))
+    trainer = make_trainer(config.step_settings())
+    params = initial_params(config, seed=0)
+    out = params.actor["params"]["out"]
+    loc_scale = jnp.array([20.0 * direction, 0.0])  # tanh(u) = +-1 whatever u's spread
+    actor = {"params": {**params.actor["params"], "out": {**out, "bias": loc_scale}}}
+    params = params._replace(actor=actor)
+    normalizer = init_normalizer(2)
+    key = jax.random.PRNGKey(3)
+    ret, velocity = trainer.window_gait(params, normalizer, key, 4)
+    assert ret == trainer.window_return(params, normalizer, key, 4)
+    np.testing.assert_allclose(velocity, 0.1 * direction * np.ones(4), rtol=1e-6)
+    monkeypatch.setattr(regime_gait, "WALKING_SPEED", 0.05)
+    record = regime_gait.gait(config, params, normalizer, 4, seed=3)
+    assert record["forward_velocity"] == pytest.approx(0.1 * direction, rel=1e-6)
+    assert record["walks"] is (direction > 0)
+    assert record["window_return"] == float(ret)

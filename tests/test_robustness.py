@@ -215,7 +215,7 @@ def test_committed_checkpoints_of_the_earlier_formats_still_load():
     directory = ROOT / "results" / "rl" / "checkpoints"
     committed = sorted(directory.glob("halfcheetah_*.msgpack"))[0]
     meta = json.loads(committed.with_suffix(".json").read_text())
-    assert checkpoints.SIDECAR_HASH not in meta  # written before sidecars were hashed
+    assert "regime" not in meta["config"]  # written before the authors' regime existed
     assert checkpoints.load(committed)[3]["eval_returns"] == meta["eval_returns"]
     # the earliest: one all_layers_sgb switch for the input typing and the SGB output layer
     oldest = json.loads(sorted(directory.glob("ant_*_authors_*.json"))[0].read_text())
@@ -224,25 +224,24 @@ def test_committed_checkpoints_of_the_earlier_formats_still_load():
     assert network.typed_inputs and network.sgb_output
 
 
-def test_a_crash_between_the_two_writes_of_a_checkpoint_is_repaired_by_a_rerun(
-    tmp_path, monkeypatch
-):
-    config = reach_config(4)
+def test_a_save_interrupted_between_the_two_writes_keeps_the_old_checkpoint(tmp_path, monkeypatch):
+    config, other = reach_config(4), reach_config(4, eval_individuals=2)
     result = _result(config)
     path = tmp_path / "agent.msgpack"
-    checkpoints.save(path, _result(reach_config(4, eval_individuals=2), seed=1))  # another run
-    real, writes = checkpoints.atomic_write, []
+    checkpoints.save(path, _result(other, seed=1))  # another run
+    real, writes = checkpoints._write_synced, []
 
     def crash_at_the_second(file, content):
         writes.append(file)
         if len(writes) == 2:
-            raise KeyboardInterrupt  # killed between the two writes
+            raise KeyboardInterrupt  # interrupted between the two writes
         return real(file, content)
 
-    monkeypatch.setattr(checkpoints, "atomic_write", crash_at_the_second)
+    monkeypatch.setattr(checkpoints, "_write_synced", crash_at_the_second)
     with pytest.raises(KeyboardInterrupt):
         checkpoints.save(path, result)
-    monkeypatch.setattr(checkpoints, "atomic_write", real)
+    monkeypatch.setattr(checkpoints, "_write_synced", real)
+    assert checkpoints.load(path)[0] == other  # the old checkpoint, whole
     assert finished_run(path, config) is None  # not finished: the sweep trains it again
     checkpoints.save(path, result)
     assert finished_run(path, config)["eval_returns"] == result.eval_returns

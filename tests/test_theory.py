@@ -273,7 +273,7 @@ def test_population_hessian_diagonal_averages_over_individuals():
 @pytest.mark.parametrize("counting", ["synapse", "table"])
 def test_genome_fixed_point_per_type_pair(counting):
     config = ClassifierConfig(hidden=(6,), cell_types=(3, 2, 4))
-    model = make_model(config, num_classes=4).clone(kl_counting=counting)
+    model = make_model(config, num_classes=4, input_shape=(6,)).clone(kl_counting=counting)
     x = jax.random.normal(jax.random.key(0), (5, 6))
     params = model.init({"params": jax.random.key(1), "sample": jax.random.key(2)}, x)
     diag = {
@@ -299,7 +299,7 @@ def test_relu_network_hessian_diagonal_is_not_negative():
     """One weight enters a ReLU network's logits piecewise linearly, so only the Gauss-Newton
     part of d^2 L / d w_s^2 remains: the diagonal is >= 0 (away from the kinks)."""
     config = ClassifierConfig(hidden=(8,), cell_types=(None, None, None))
-    model = make_model(config, num_classes=3)
+    model = make_model(config, num_classes=3, input_shape=(5,))
     x = jax.random.normal(jax.random.key(0), (20, 5))
     params = model.init({"params": jax.random.key(1), "sample": jax.random.key(2)}, x)
     params = {"params": jax.tree_util.tree_map(lambda p: 3 * p + 0.1, params["params"])}
@@ -321,7 +321,7 @@ def test_fixed_point_summary():
 
 def test_synapse_view_reproduces_the_model():
     config = ClassifierConfig(hidden=(6,), cell_types=(3, 2, 4))
-    model = make_model(config, num_classes=4)
+    model = make_model(config, num_classes=4, input_shape=(7,))
     x = jax.random.normal(jax.random.key(0), (5, 7))
     params = model.init({"params": jax.random.key(1), "sample": jax.random.key(2)}, x)
     params = {"params": jax.tree_util.tree_map(lambda p: p + 0.3, params["params"])}

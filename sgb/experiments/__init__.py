@@ -244,6 +244,18 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
     ),
+    "regime_gait": Experiment(
+        "regime_gait",
+        figure="whether the agents of Fig. 3C at 5 x 10^7 steps walk: each regime run's "
+        "forward velocity on the authors' evaluation window (chapter 5)",
+        inputs="the regime's checkpoints (at smoke, of `reproduce regime --profile smoke` "
+        "in the same results directory)",
+        costs={
+            "smoke": "2 windows of 4 x 64 steps, not measured",
+            "cpu": "256 x 1000 env-steps per finished regime run, not yet measured; resumable",
+            "paper": "the cpu runs; not measured on a GPU",
+        },
+    ),
     "populations": Experiment(
         "populations",
         figure="beyond Fig. 4E and 5: individuals of 6 genomes (ours and the authors', 64 "

@@ -49,8 +49,9 @@ DECIMALS = 3
 @dataclass(frozen=True)
 class HedgingConfig:
     """Which genomes (64-type checkpoints of the spread sweep at ``source``, by initial
-    rho and training seed), and how many members, episodes and steps; genome j draws its
-    individuals and initial states with seed ``seed + j``."""
+    rho and training seed, each listed once), and how many members, episodes and steps;
+    genome j draws its individuals and initial states with seed ``seed + j``, a seed of
+    ``sgb.validation.seed`` for every j."""
 
     rho_inits: tuple[float, ...]
     seeds: tuple[int, ...]
@@ -61,13 +62,16 @@ class HedgingConfig:
     source: str = "cpu"
 
     def __post_init__(self) -> None:
-        for i, rho in enumerate(self.rho_inits):
-            validation.real(f"rho_inits[{i}]", rho)
-        validation.integers("seeds", self.seeds, minimum=0)
+        validation.distinct("rho_inits", validation.reals("rho_inits", self.rho_inits))
+        validation.distinct("seeds", validation.integers("seeds", self.seeds, minimum=0))
         validation.integer("n_individuals", self.n_individuals, minimum=max(KS))
         validation.integer("episodes", self.episodes)
         validation.integer("episode_length", self.episode_length)
-        validation.integer("seed", self.seed, minimum=0)
+        last = len(self.genomes()) - 1
+        if validation.seed("seed", self.seed) + last >= 2**32:
+            raise ValueError(
+                f"seed + j must be < 2**32 for every genome j up to {last}, got seed={self.seed}"
+            )
         validation.choice("source", self.source, PROFILE_NAMES)
 
     def genomes(self) -> list[tuple[float, int]]:

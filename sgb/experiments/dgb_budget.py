@@ -37,7 +37,8 @@ from sgb.supervised import DenseConfig, at_chance, dense_accuracy, train_and_eva
 class BudgetConfig:
     """One DGB at compression ``ratio`` (our convention; input and output types as in
     Figure 2's sweep, for the ratio's bookkeeping only), trained ``dgb.rounds`` rounds
-    in chunks of ``chunk_rounds``."""
+    in chunks of ``chunk_rounds``, on the data named ``dataset`` (the name ``run`` loads,
+    ``sgb.data.load``; ``train_with_budget`` takes the data themselves)."""
 
     dataset: str = "fashion-mnist"
     ratio: float = 10.0
@@ -51,6 +52,7 @@ class BudgetConfig:
         return self.in_types, self.out_types
 
     def __post_init__(self) -> None:
+        validation.instance("dataset", self.dataset, str)
         validation.positive("ratio", self.ratio)
         validation.instance("dgb", self.dgb, DGBConfig)
         validation.integer("chunk_rounds", self.chunk_rounds)

@@ -25,7 +25,7 @@ from tqdm.auto import tqdm
 
 from sgb import validation
 from sgb.compression import compression
-from sgb.data import load
+from sgb.data import DATASETS, load
 from sgb.evolution import EvolutionConfig, evolve
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
@@ -42,6 +42,7 @@ class EvolutionSweep:
     seeds: tuple[int, ...]
 
     def __post_init__(self) -> None:
+        validation.choice("dataset", self.dataset, DATASETS)
         validation.instance("base", self.base, EvolutionConfig)
         validation.integers("hidden_types", self.hidden_types, minimum=1)
         validation.integers("seeds", self.seeds, minimum=0)

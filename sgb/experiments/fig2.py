@@ -185,9 +185,19 @@ def sweep_summary(records: list[dict]) -> dict[str, Any]:
         out[convention] = {
             "summary": summary,
             "summary_mean_network": summarise_compression(sgb_records, "mean_network", convention),
-            "crossovers": crossovers(summary) if {"sgb", "dgb"} <= set(summary) else [],
+            "crossovers": crossovers(summary) if _comparable(summary) else [],
         }
     return out
+
+
+def _comparable(summary: dict[str, dict[str, list]], a: str = "sgb", b: str = "dgb") -> bool:
+    """Whether curves ``a`` and ``b`` of ``summary`` span a common range of compression,
+    each with two points at least, where ``crossovers`` can look for a crossing (a smoke
+    sweep has one point a curve)."""
+    if not {a, b} <= set(summary):
+        return False
+    xa, xb = summary[a]["compression"], summary[b]["compression"]
+    return len(xa) > 1 and len(xb) > 1 and max(xa[0], xb[0]) < min(xa[-1], xb[-1])
 
 
 # ----------------------------------------------------------------------------- profiles

@@ -85,6 +85,22 @@ def check_actor_params(actor_params: dict) -> dict:
     return validation.finite_tree("actor_params", actor_params)
 
 
+def check_actor_shapes(actor_params: dict, network: NetworkConfig, spec: EnvSpec) -> dict:
+    """``actor_params`` if its leaves have the shapes of the actor ``network`` describes on
+    the environment of ``spec``; else a ``ValueError`` naming the first leaves that differ,
+    (leaf, shape, expected shape)."""
+    env = make_env(spec)
+    actor = make_agent(network.architecture, env.observation_size, env.action_size).actor
+    expected = jax.eval_shape(lambda: actor.init(jax.random.PRNGKey(0), network))
+    diff = validation.shape_differences(actor_params, expected)
+    if diff:
+        raise ValueError(
+            f"actor_params do not have the shapes of the actor that network describes on "
+            f"{spec.name} (first differences, (leaf, shape, expected shape): {diff})"
+        )
+    return actor_params
+
+
 def _keys(n_individuals: int, episodes: int, seed: int) -> tuple[jax.Array, jax.Array]:
     validation.integer("n_individuals", n_individuals)
     validation.integer("episodes", episodes)
@@ -116,15 +132,16 @@ def population_returns(
     states, row by row (for paired comparisons). With ``stochastic=True`` actions are
     sampled from the policy (noise from ``fold_in(PRNGKey(seed), 1)``).
 
-    The arguments are checked first: counts and ``seed`` integers, ``actor_params`` finite,
-    ``normalizer`` finite statistics of the environment's observations.
+    The arguments are checked first: counts and ``seed`` integers, ``actor_params`` finite
+    and of the shapes of ``network``'s actor, ``normalizer`` finite statistics of the
+    environment's observations.
     """
     validation.instance("spec", spec, EnvSpec)
     validation.instance("network", network, NetworkConfig)
     validation.integer("episode_length", episode_length)
     validation.instance("mean_network", mean_network, bool)
     validation.instance("stochastic", stochastic, bool)
-    check_actor_params(actor_params)
+    check_actor_shapes(check_actor_params(actor_params), network, spec)
     check_normalizer(normalizer, make_env(spec).observation_size)
     ind_keys, reset_keys = _keys(n_individuals, episodes, seed)
     total = _returns(

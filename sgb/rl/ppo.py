@@ -99,6 +99,11 @@ class PPOConfig:
                 f"num_envs x unrolls_per_iteration = {sequences} must be a multiple of "
                 f"num_minibatches={self.num_minibatches}"
             )
+        if self.total_steps // self.steps_per_iteration < self.num_evals:
+            raise ValueError(
+                f"total_steps={self.total_steps} must hold at least one iteration of "
+                f"{self.steps_per_iteration} steps per evaluation (num_evals={self.num_evals})"
+            )
 
     @property
     def steps_per_iteration(self) -> int:

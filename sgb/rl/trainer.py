@@ -197,8 +197,9 @@ class Trainer:
 
     def shared_step(self, params: Params, normalizer, start_state):
         """The authors' regime's environment step ``(state, steps), key -> (state, steps),
-        (obs, u, log_prob, reward, done, truncation)``, for states (E,): one actor drawn
-        for all E, actions sampled, ended episodes restarted from ``start_state``."""
+        (obs, u, log_prob, reward, done, truncation, metrics)``, for states (E,): one actor
+        drawn for all E, actions sampled, ended episodes restarted from ``start_state``;
+        ``metrics`` are the environment's of the step (Brax's ``State.metrics``)."""
 
         def step(carry, k):
             state, steps = carry
@@ -207,7 +208,7 @@ class Trainer:
             u, log_prob, nstate, steps, done, truncation = self.act(
                 actor, normalizer, state, steps, k_u
             )
-            out = (state.obs, u, log_prob, nstate.reward, done, truncation)
+            out = (state.obs, u, log_prob, nstate.reward, done, truncation, nstate.metrics)
 
             def restart(first, now):
                 return jnp.where(done.reshape(done.shape + (1,) * (now.ndim - 1)) > 0, first, now)
@@ -222,7 +223,7 @@ class Trainer:
         key, k_act = jax.random.split(ts.key)
         step = self.shared_step(ts.params, ts.normalizer, ts.start_state)
         keys = jax.random.split(k_act, self.settings.unroll_length)
-        (env_state, steps), out = jax.lax.scan(step, (ts.env_state, ts.steps), keys)
+        (env_state, steps), (*out, _) = jax.lax.scan(step, (ts.env_state, ts.steps), keys)
         out = [jnp.swapaxes(x, 0, 1) for x in out]
         data = Unroll(
             *out,
@@ -250,20 +251,41 @@ class Trainer:
         steps = jnp.zeros(self.settings.num_envs)
         return ts._replace(env_state=env_state, start_state=env_state, steps=steps, key=key)
 
+    def _window(self, params: Params, normalizer, key: jax.Array, n_envs: int):
+        """The authors' evaluation window (``eval_unroll`` in ``RL/training_torch.py``):
+        ``n_envs`` environments play ``episode_length`` steps under the authors' regime (a
+        new draw every step, sampled actions, ended episodes restarted); the reward and
+        done of every step, (T, E) each, and the environment's metrics, (T, E) each."""
+        k_reset, k_act = jax.random.split(key)
+        state = jax.vmap(self.env.reset)(jax.random.split(k_reset, n_envs))
+        step = self.shared_step(params, normalizer, state)
+        keys = jax.random.split(k_act, self.settings.episode_length)
+        _, (_, _, _, reward, done, _, metrics) = jax.lax.scan(
+            step, (state, jnp.zeros(n_envs)), keys
+        )
+        return reward, done, metrics
+
     @cached_property
     def window_return(self):
-        """Jitted ``(params, normalizer, key, n_envs) -> return``: the authors' evaluation
-        (``eval_unroll`` in ``RL/training_torch.py``): ``n_envs`` environments play
-        ``episode_length`` steps under the authors' regime (a new draw every step, sampled
-        actions, ended episodes restarted); the summed reward over the episodes ended."""
+        """Jitted ``(params, normalizer, key, n_envs) -> return``: the summed reward over
+        the episodes ended in the authors' evaluation window (``_window``), per episode."""
 
         def run(params: Params, normalizer, key: jax.Array, n_envs: int) -> jnp.ndarray:
-            k_reset, k_act = jax.random.split(key)
-            state = jax.vmap(self.env.reset)(jax.random.split(k_reset, n_envs))
-            step = self.shared_step(params, normalizer, state)
-            keys = jax.random.split(k_act, self.settings.episode_length)
-            _, (_, _, _, reward, done, _) = jax.lax.scan(step, (state, jnp.zeros(n_envs)), keys)
+            reward, done, _ = self._window(params, normalizer, key, n_envs)
             return jnp.sum(reward) / jnp.maximum(jnp.sum(done), 1.0)
+
+        return jax.jit(run, static_argnames="n_envs")
+
+    @cached_property
+    def window_gait(self):
+        """Jitted ``(params, normalizer, key, n_envs) -> (return, velocity)``: on the window
+        of ``window_return`` (the same key plays the same steps), its return and each
+        environment's mean forward velocity (m/s, Brax's ``x_velocity``), shape (E,)."""
+
+        def run(params: Params, normalizer, key: jax.Array, n_envs: int):
+            reward, done, metrics = self._window(params, normalizer, key, n_envs)
+            ret = jnp.sum(reward) / jnp.maximum(jnp.sum(done), 1.0)
+            return ret, jnp.mean(metrics["x_velocity"], axis=0)
 
         return jax.jit(run, static_argnames="n_envs")
 

@@ -1,0 +1,110 @@
+"""Whether the agents of the regime grid walk: each finished run of ``sgb.experiments.regime``
+played on the authors' evaluation window (``sgb.rl.trainer.Trainer.window_gait``), its
+return and each environment's mean forward velocity over the window.
+
+A return says how well an agent does, not what it does: the Ant earns 1 per step for staying
+upright (Brax's ``healthy_reward``) and its forward velocity in m/s for moving (its
+``forward_reward``), so an agent that stands still for the 1000 steps of an episode earns
+about 1000, while a walking one earns several thousand. A run walks if its forward velocity,
+averaged over the window's environments, is at least ``WALKING_SPEED``, 1 m/s: the speed at
+which moving forward earns as much per step as staying upright. So a fall of the return
+at few cell types can be told apart as agents that walk less well (the paper's capacity) or
+agents that have not learned to walk at all.
+
+The runs are those of the regime's profile; a run not yet trained is left out (and evaluated
+by a later run of this experiment), one already in the results file is not evaluated again.
+"""
+
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import jax
+import numpy as np
+
+from sgb import validation
+from sgb.experiments import PROFILE_NAMES, check_profile
+from sgb.experiments.regime import PROFILES as REGIME_PROFILES
+from sgb.experiments.regime import RegimeRun, checkpoint_name, run_config
+from sgb.experiments.rl import CHECKPOINT_DIR, checkpoint_root, finished_run
+from sgb.provenance import git_commit
+from sgb.recording import Recording, start
+from sgb.rl import checkpoints
+from sgb.rl.ppo import PPOConfig
+from sgb.rl.trainer import make_trainer
+
+WALKING_SPEED = 1.0  # m/s: the forward reward per step equals the healthy reward (1)
+
+
+@dataclass(frozen=True)
+class GaitConfig:
+    """Which profile's regime runs to play, on how many environments, from which seed."""
+
+    regime_profile: str
+    n_envs: int = 256
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_profile(self.regime_profile)
+        validation.integer("n_envs", self.n_envs, minimum=2)
+        validation.seed("seed", self.seed)
+
+
+def gait_config(profile: str) -> GaitConfig:
+    """The regime runs of ``profile`` on 256 environments (4 at smoke)."""
+    check_profile(profile)
+    return GaitConfig(profile, n_envs=4 if profile == "smoke" else 256)
+
+
+def gait(ppo: PPOConfig, params, normalizer, n_envs: int, seed: int) -> dict:
+    """The window return and the forward velocity (m/s) of an agent: its mean over the
+    ``n_envs`` environments, their SEM, and whether it walks (``WALKING_SPEED``)."""
+    trainer = make_trainer(ppo.step_settings())
+    key = jax.random.PRNGKey(validation.seed("seed", seed))
+    ret, velocity = trainer.window_gait(params, normalizer, key, n_envs)
+    velocity = np.asarray(velocity, dtype=np.float64)
+    mean = float(velocity.mean())
+    return {
+        "window_return": float(ret),
+        "forward_velocity": mean,
+        "forward_velocity_sem": float(velocity.std(ddof=1) / np.sqrt(velocity.size)),
+        "walks": mean >= WALKING_SPEED,
+    }
+
+
+def run(profile: str, out_dir: Path) -> Path:
+    """Play every finished regime run of the profile not yet in the results file, writing
+    the file after each; returns its path."""
+    recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_gait_ant")
+    config, regime = recording.config, REGIME_PROFILES[recording.config.regime_profile]
+    runs = list(recording.earlier().get("runs", []))
+    done = {(r["cell_types"], r["seed"], r["genome"]) for r in runs}
+    for i, r in enumerate(regime.runs):
+        if (r.cell_types, r.seed, r.genome) in done:
+            continue
+        name = str(Path(CHECKPOINT_DIR) / checkpoint_name(r, config.regime_profile))
+        checkpoint = checkpoint_root(Path(out_dir), name) / name
+        if finished_run(checkpoint, run_config(regime, r)) is None:
+            continue
+        print(f"regime gait {r.label} seed {r.seed} ({i + 1}/{len(regime.runs)})", flush=True)
+        runs.append(_played(r, checkpoint, config))
+        _write(recording, runs)
+    return _write(recording, runs)
+
+
+def _played(r: RegimeRun, checkpoint: Path, config: GaitConfig) -> dict:
+    tic = time.perf_counter()
+    ppo, params, normalizer, _ = checkpoints.load(checkpoint)
+    record = gait(ppo, params, normalizer, config.n_envs, config.seed)
+    wall = time.perf_counter() - tic
+    run = {"cell_types": r.cell_types, "seed": r.seed, "genome": r.genome}
+    return {**run, **record, "wall_time_s": round(wall, 2), "git_commit": git_commit()}
+
+
+def _write(recording: Recording, runs: list[dict]) -> Path:
+    runs = sorted(runs, key=lambda r: (r["genome"], r["cell_types"] or 0, r["seed"]))
+    results = {"env": "ant", "walking_speed": WALKING_SPEED, "runs": runs}
+    return recording.write(results, sorted({r["seed"] for r in runs}), parts=runs)
+
+
+PROFILES = {p: gait_config(p) for p in PROFILE_NAMES}
