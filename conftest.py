@@ -23,3 +23,6 @@ def with_fast_compile(flags: str) -> str:
 
 
 os.environ["XLA_FLAGS"] = with_fast_compile(os.environ.get("XLA_FLAGS", ""))
+# MuJoCo picks its GL backend when first imported: a test module that imports brax before
+# sgb.rl.envs (which sets the same default) would leave the renders without a context.
+os.environ.setdefault("MUJOCO_GL", "egl")
