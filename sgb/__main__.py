@@ -1,5 +1,9 @@
 """Command line: ``python -m sgb reproduce EXPERIMENT --profile smoke|cpu|paper [options]``.
 
+The arguments are checked before anything runs; the paper profile is refused where JAX
+finds no GPU on this machine (without ``--ray``: a cluster's machines run it), unless
+``--force-cpu``.
+
 Results go to ``--out-dir``, else ``$SGB_RESULTS``, else ``./sgb-results``. The committed
 results (``sgb.paths.committed_results()``) are written only with
 ``--maintainer-write-committed``; an ``--out-dir`` inside them is refused without it.
@@ -12,15 +16,24 @@ import argparse
 import functools
 import inspect
 import os
+import subprocess
 import sys
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
+from typing import Any
 
 from sgb import cluster, validation
 from sgb.divergence import TrainingDiverged
-from sgb.experiments import EXPERIMENTS, PROFILE_NAMES, get_experiment
+from sgb.experiments import (
+    CHAPTERS,
+    DEFAULT_PROFILE,
+    EXPERIMENTS,
+    PROFILE_NAMES,
+    get_experiment,
+)
 from sgb.paths import committed_results
+from sgb.recording import pick
 
 RESULTS_ENV = "SGB_RESULTS"
 DEFAULT_OUT_DIR = Path("sgb-results")
@@ -42,7 +55,8 @@ def _committed() -> Path | None:
 
 def resolve_out_dir(out_dir: Path | None, maintainer: bool) -> Path:
     """The directory a run writes to; a ValueError for the committed results (or a directory
-    inside them) unless ``maintainer``, which writes there and nowhere else."""
+    inside them) unless ``maintainer``, which writes there and nowhere else, and for a
+    directory that a file stands in the place of (it, or one above it)."""
     committed = _committed()
     if maintainer:
         if committed is None:
@@ -62,6 +76,11 @@ def resolve_out_dir(out_dir: Path | None, maintainer: bool) -> Path:
             f"(for maintainers refreshing them). Leave out --out-dir to write to "
             f"${RESULTS_ENV} or ./{DEFAULT_OUT_DIR}, or name another directory."
         )
+    blocker = next(p for p in (out_dir, *out_dir.parents) if p.exists())
+    if not blocker.is_dir():
+        raise ValueError(
+            f"cannot write results under {out_dir}: {blocker} is a file, not a directory"
+        )
     return out_dir
 
 
@@ -75,13 +94,22 @@ def _block(label: str, text: str, indent: int, hanging: int = 2) -> list[str]:
 
 
 def experiments_help() -> str:
-    """What ``reproduce --help`` says of every experiment and of where results go."""
-    lines = ["experiments (the cost of each profile; smoke is what the tests run):"]
-    for name, experiment in EXPERIMENTS.items():
-        lines += _block(f"{name}: ", experiment.figure, 2, 4)
-        lines += _block("inputs: ", experiment.inputs, 6)
-        for profile in PROFILE_NAMES:
-            lines += _block(f"{profile}: ", experiment.costs.get(profile, "not stated"), 6)
+    """What ``reproduce --help`` says of every experiment, by chapter of the book, and of
+    where results go."""
+    lines = _block(
+        "",
+        "experiments by chapter of the book, with the cost of each profile "
+        f"({DEFAULT_PROFILE}, the default, is what the tests run):",
+        0,
+    )
+    for chapter in sorted({experiment.chapter for experiment in EXPERIMENTS.values()}):
+        lines.append(f"chapter {chapter}, {CHAPTERS[chapter]}:")
+        for name, experiment in EXPERIMENTS.items():
+            if experiment.chapter == chapter:
+                lines += _block(f"{name}: ", experiment.figure, 2, 4)
+                lines += _block("inputs: ", experiment.inputs, 6)
+                for profile in PROFILE_NAMES:
+                    lines += _block(f"{profile}: ", experiment.costs.get(profile, "not stated"), 6)
     lines.append("")
     lines.append("where results go:")
     lines += _block(
@@ -114,7 +142,18 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     reproduce.add_argument("experiment", choices=list(EXPERIMENTS))
-    reproduce.add_argument("--profile", choices=PROFILE_NAMES, default="smoke")
+    reproduce.add_argument(
+        "--profile",
+        choices=PROFILE_NAMES,
+        default=DEFAULT_PROFILE,
+        help=f"the budget to run at (default: {DEFAULT_PROFILE}, what the tests run); cpu "
+        "made the book's committed results; paper is the paper's, meant for a GPU",
+    )
+    reproduce.add_argument(
+        "--force-cpu",
+        action="store_true",
+        help="run the paper profile even where JAX finds no GPU",
+    )
     reproduce.add_argument(
         "--out-dir",
         type=Path,
@@ -175,23 +214,45 @@ def _files(directory: Path) -> dict[Path, tuple[int, int]]:
     }
 
 
+def jax_backend() -> str:
+    """``jax.default_backend()`` of a child process: this one starts no backend, so holds
+    no GPU memory that workers would need, and its runs still get their XLA flags."""
+    done = subprocess.run(
+        [sys.executable, "-c", "import jax; print(jax.default_backend())"],
+        capture_output=True,
+        text=True,
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"JAX could not start to tell its backend: {done.stderr[-500:]}")
+    return done.stdout.split()[-1]
+
+
+def check_backend(profile: str, force_cpu: bool) -> None:
+    """Refuse the paper profile where JAX finds no GPU, unless ``force_cpu``."""
+    if profile == "paper" and not force_cpu and jax_backend() == "cpu":
+        raise ValueError(
+            "the paper profile is meant for a GPU, and JAX finds none here (its backend is "
+            "cpu); run --profile cpu, or add --force-cpu to run the paper profile on the CPU"
+        )
+
+
 def main(argv: list[str] | None = None) -> int:
+    """``python -m sgb`` with ``argv``; its exit status (2 for bad arguments, 1 for a failed
+    run)."""
     args = build_parser().parse_args(argv)
     options = {k: v for k, v in (("dataset", args.dataset), ("env", args.env)) if v is not None}
+    experiment = get_experiment(args.experiment)
     try:
         out_dir = resolve_out_dir(args.out_dir, args.maintainer_write_committed)
-        run = get_experiment(args.experiment).run
+        run = experiment.run
         _check_options(args.experiment, run, options)
-        before = _files(out_dir)
-        print(f"{args.experiment} ({args.profile}): results go to {out_dir}", flush=True)
-        if before:
-            print(
-                f"  {out_dir} holds {len(before)} file{'s' * (len(before) != 1)}; what an "
-                "earlier run of the same config left there is reused or continued, not redone",
-                flush=True,
-            )
+        _check_choices(experiment.profiles, args.profile, options)
         workers = worker_count(args.experiment, args.profile, args.workers, args.ray)
-        if get_experiment(args.experiment).shares_runs:
+        if args.ray is None:  # on a cluster, its machines run the profile, not this one
+            check_backend(args.profile, args.force_cpu)
+        print(f"{args.experiment} ({args.profile}): results go to {out_dir}", flush=True)
+        before = _files(out_dir)
+        if experiment.shares_runs:
             # its runs take one XLA thread here as in a worker, so come out the same (sgb.cluster)
             os.environ["XLA_FLAGS"] = cluster.one_thread(os.environ.get("XLA_FLAGS", ""))
         if workers > 1 or args.ray is not None:
@@ -231,6 +292,18 @@ def _check_options(experiment: str, run: Callable[..., Path], options: dict[str,
     if unknown:
         flags = ", ".join(f"--{name}" for name in unknown)
         raise ValueError(f"{experiment} does not take {flags}")
+
+
+def _check_choices(profiles: Mapping[str, Any], profile: str, options: dict[str, str]) -> None:
+    """Reject a --dataset or --env that names no config of ``profile``, for an experiment
+    whose profiles hold one per dataset or environment (``sgb.recording.pick``)."""
+    if not isinstance(profiles[profile], Mapping):
+        return
+    known = sorted({name for configs in profiles.values() for name in configs})
+    for option, value in options.items():
+        if value not in known:
+            raise ValueError(f"unknown {option} {value!r}; choose one of {known}")
+        pick(profiles, profile, value)
 
 
 if __name__ == "__main__":

@@ -1,6 +1,7 @@
 """Recording a run: the one way every experiment checks its profile, names its results
-file, continues what an earlier run of the same config left there, times itself and
-writes its results with provenance, atomically (``sgb.provenance``).
+file, says what it is when it starts, continues what an earlier run of the same config
+left there, times itself and writes its results with provenance, atomically
+(``sgb.provenance``).
 
     recording = start(PROFILES, profile, out_dir, "bbb")
     results = compute(recording.config)
@@ -18,12 +19,12 @@ from pathlib import Path
 from typing import Any, Generic, TypeVar
 
 from sgb.experiments import check_profile
-from sgb.provenance import earlier_results, provenance, results_file, write_results
+from sgb.provenance import earlier_results, git_commit, provenance, results_file, write_results
 
 Config = TypeVar("Config")
 
 
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass
 class Recording(Generic[Config]):
     """One run of an experiment at ``profile``: its config, its results file and when it
     began (``time.perf_counter()``, s)."""
@@ -32,11 +33,21 @@ class Recording(Generic[Config]):
     profile: str
     path: Path
     began: float
+    _read: bool = dataclasses.field(default=False, init=False, repr=False, compare=False)
 
     def earlier(self) -> dict[str, Any]:
         """The results an earlier run of this config left in the file (``{}`` if none); a
-        ValueError if a run of another config wrote it."""
-        return earlier_results(self.path, self.config)
+        ValueError if a run of another config wrote it. The first read says when it finds
+        some, which the run then reuses (later reads may find this run's own)."""
+        results = earlier_results(self.path, self.config)
+        if results and not self._read:
+            print(
+                f"  reusing what an earlier run of the same config left in {self.path}: "
+                "its finished parts are not redone",
+                flush=True,
+            )
+        self._read = True
+        return results
 
     def write(
         self,
@@ -68,11 +79,36 @@ def start(
 
     Its results file is ``out_dir/{stem}_{profile}.json`` (``stem`` may be a function of
     the config); a bad profile or choice, or an unwritable ``out_dir``, fails here, before
-    any work."""
-    config = profiles[check_profile(profile)]
-    if choice is not None:
-        if choice not in config:
-            raise ValueError(f"{choice!r} has no {profile} profile; choose one of {sorted(config)}")
-        config = config[choice]
+    any work. It says what runs: the stem, the profile, the commit, the config's seeds
+    (where it has them) and the results file."""
+    config = pick(profiles, profile, choice)
     name = stem(config) if callable(stem) else stem
-    return Recording(config, profile, results_file(out_dir, name, profile), time.perf_counter())
+    path = results_file(out_dir, name, profile)
+    seeds = _seeds(config)
+    print(
+        f"{name}, {profile} profile, commit {git_commit()}"
+        f"{f', seeds {seeds}' if seeds else ''}: results file {path}",
+        flush=True,
+    )
+    return Recording(config, profile, path, time.perf_counter())
+
+
+def pick(profiles: Mapping[str, Any], profile: str, choice: str | None = None) -> Any:
+    """The config of ``profile`` in ``profiles`` (with ``choice``, its config for that
+    dataset or environment); a ValueError for a profile or choice they do not hold."""
+    config = profiles[check_profile(profile)]
+    if choice is None:
+        return config
+    if choice not in config:
+        raise ValueError(f"{choice!r} has no {profile} profile; choose one of {sorted(config)}")
+    return config[choice]
+
+
+def _seeds(config: Any) -> list[int]:
+    """The seeds ``config`` names: its ``seeds``, else its ``seed``, else those of its
+    parts where it is a mapping (``[]`` if none)."""
+    if isinstance(config, Mapping):
+        return sorted({seed for part in config.values() for seed in _seeds(part)})
+    if hasattr(config, "seeds"):
+        return list(config.seeds)
+    return [config.seed] if hasattr(config, "seed") else []

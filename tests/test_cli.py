@@ -1,7 +1,9 @@
 """``python -m sgb reproduce``: where results go, the committed results kept out of reach
-without the maintainer flag, what a rerun keeps, and a ``--help`` that describes every
-experiment."""
+without the maintainer flag, what a rerun keeps and says it reuses, what a run says it is,
+the arguments checked before anything runs, and a ``--help`` that describes every
+experiment by chapter."""
 
+import dataclasses
 import json
 import re
 import shlex
@@ -9,12 +11,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import jax
 import pytest
 
-from sgb.__main__ import MAINTAINER_FLAG, build_parser, experiments_help, main
-from sgb.experiments import EXPERIMENTS, PROFILE_NAMES, fig2
+import sgb.__main__
+from sgb.__main__ import MAINTAINER_FLAG, build_parser, experiments_help, jax_backend, main
+from sgb.experiments import CHAPTERS, EXPERIMENTS, PROFILE_NAMES, bayes_by_backprop, fig2
 from sgb.paths import committed_results
-from sgb.provenance import write_results
+from sgb.provenance import git_commit, write_results
+from sgb.recording import start
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -62,7 +67,11 @@ def test_a_smoke_reproduce_writes_to_sgb_results_and_leaves_the_committed_result
     before = _committed_state()
     assert main(["reproduce", "dgb_budget", "--profile", "smoke"]) == 0
     written = Path("sgb-results") / "dgb_budget_digits_smoke.json"
-    assert f"wrote {written}" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert f"wrote {written}" in out and "reusing what an earlier run" not in out
+    assert (
+        f"dgb_budget_digits, smoke profile, commit {git_commit()}: results file {written}\n" in out
+    )
     assert [p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file()] == [written]
     assert _committed_state() == before
     # a rerun reuses the finished run, says so, and leaves the file (and its provenance) as is
@@ -70,6 +79,7 @@ def test_a_smoke_reproduce_writes_to_sgb_results_and_leaves_the_committed_result
     assert main(["reproduce", "dgb_budget", "--profile", "smoke"]) == 0
     out = capsys.readouterr().out
     assert "reusing the finished DGB run" in out and f"kept {written}" in out
+    assert f"reusing what an earlier run of the same config left in {written}" in out
     assert written.read_bytes() == first
     # $SGB_RESULTS moves the default
     monkeypatch.setenv("SGB_RESULTS", str(tmp_path / "elsewhere"))
@@ -146,3 +156,120 @@ def test_importing_the_package_starts_no_jax_backend_so_the_cli_sets_xla_threads
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr[-2000:]
+
+
+@dataclasses.dataclass(frozen=True)
+class _Toy:
+    seeds: tuple[int, ...]
+
+
+def _stand_in_for_bbb(monkeypatch, reads: bool) -> list[str]:
+    """bbb's run replaced by a run of seconds of a toy config that reads what an earlier
+    run left (``reads``) or does not; the profiles it is run at."""
+    profiles = []
+
+    def run(profile: str, out_dir: Path) -> Path:
+        profiles.append(profile)
+        recording = start({p: _Toy((0, 1)) for p in PROFILE_NAMES}, profile, out_dir, "bbb")
+        if reads:
+            recording.earlier()
+        return recording.write({"value": 1}, seeds=recording.config.seeds)
+
+    monkeypatch.setattr(bayes_by_backprop, "run", run)
+    return profiles
+
+
+@pytest.mark.parametrize("reads", [False, True])
+def test_a_rerun_says_it_reuses_an_earlier_results_file_only_where_it_reads_it(
+    reads, tmp_path, monkeypatch, capsys
+):
+    _stand_in_for_bbb(monkeypatch, reads)
+    (tmp_path / "other_smoke.json").write_text("{}")  # not of this config: never reused
+    assert main(["reproduce", "bbb", "--out-dir", str(tmp_path)]) == 0
+    assert "reus" not in capsys.readouterr().out.replace(str(tmp_path), "DIR")
+    assert main(["reproduce", "bbb", "--out-dir", str(tmp_path)]) == 0
+    out = capsys.readouterr().out.replace(str(tmp_path), "DIR")
+    reuse = "  reusing what an earlier run of the same config left in DIR/bbb_smoke.json: "
+    assert out.count(reuse) == out.count("reus") == reads and "kept DIR/bbb_smoke.json" in out
+
+
+def test_a_run_says_what_it_is_when_it_starts(tmp_path, monkeypatch, capsys):
+    _stand_in_for_bbb(monkeypatch, reads=False)
+    assert main(["reproduce", "bbb", "--out-dir", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[:2] == [
+        f"bbb (smoke): results go to {tmp_path}",
+        f"bbb, smoke profile, commit {git_commit()}, seeds [0, 1]: results file "
+        f"{tmp_path / 'bbb_smoke.json'}",
+    ]
+    # seeds of a config's parts, and none where the config has none
+    parts = {p: {"digits": {"sweep": _Toy((2, 3)), "ablation": None}} for p in PROFILE_NAMES}
+    start(parts, "cpu", tmp_path, "toy", choice="digits")
+    assert capsys.readouterr().out.endswith(
+        f"seeds [2, 3]: results file {tmp_path / 'toy_cpu.json'}\n"
+    )
+    start({p: None for p in PROFILE_NAMES}, "cpu", tmp_path, "plain")
+    assert "seeds" not in capsys.readouterr().out
+
+
+def test_the_paper_profile_asks_for_a_gpu_or_force_cpu(tmp_path, monkeypatch, capsys):
+    profiles = _stand_in_for_bbb(monkeypatch, reads=False)
+    monkeypatch.setattr(sgb.__main__, "jax_backend", lambda: "cpu")
+    assert main(["reproduce", "bbb", "--profile", "paper", "--out-dir", str(tmp_path)]) == 2
+    captured = capsys.readouterr()
+    assert "the paper profile is meant for a GPU" in captured.err and "--force-cpu" in captured.err
+    assert captured.out == "" and profiles == [] and list(tmp_path.iterdir()) == []
+    paper = ["reproduce", "bbb", "--profile", "paper", "--force-cpu", "--out-dir", str(tmp_path)]
+    assert main(paper) == 0
+    assert profiles == ["paper"] and (tmp_path / "bbb_paper.json").is_file()
+    monkeypatch.setattr(sgb.__main__, "jax_backend", lambda: "gpu")
+    assert main(["reproduce", "bbb", "--profile", "paper", "--out-dir", str(tmp_path)]) == 0
+    assert profiles == ["paper", "paper"]
+
+
+def test_the_backend_asked_of_a_child_process_is_jax_s_own():
+    assert jax_backend() == jax.default_backend()
+
+
+def test_help_names_the_default_profile_and_lists_the_experiments_by_chapter(capsys):
+    with pytest.raises(SystemExit):
+        main(["reproduce", "--help"])
+    text = capsys.readouterr().out
+    assert "(default: smoke" in " ".join(text.split())
+    chapter, found, headings = None, {}, []
+    for line in experiments_help().splitlines():
+        if heading := re.fullmatch(r"chapter (\d), (.*):", line):
+            chapter = int(heading[1])
+            headings.append(chapter)
+            assert heading[2] == CHAPTERS[chapter]
+        elif entry := re.match(r"  (\w+): ", line):
+            found[entry[1]] = chapter
+    assert headings == sorted({e.chapter for e in EXPERIMENTS.values()})
+    assert found == {name: experiment.chapter for name, experiment in EXPERIMENTS.items()}
+
+
+@pytest.mark.parametrize(
+    "args, error",
+    [
+        (["fig2", "--dataset", "cifar11"], "unknown dataset 'cifar11'; choose one of ['cifar10', "),
+        (["fig2", "--dataset", "cifar10"], "'cifar10' has no smoke profile; choose one of "),
+        (["fig3", "--env", "walker"], "unknown env 'walker'; choose one of ['ant', 'halfcheetah']"),
+    ],
+)
+def test_a_dataset_or_environment_is_checked_before_anything_runs(args, error, tmp_path, capsys):
+    assert main(["reproduce", *args, "--out-dir", str(tmp_path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err.startswith(f"error: {error}") and captured.out == ""
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("below", ["", "out"])
+def test_an_out_dir_a_file_stands_in_for_is_refused_naming_the_file(below, tmp_path, capsys):
+    taken = tmp_path / "taken"
+    taken.write_text("")
+    assert main(["reproduce", "bbb", "--out-dir", str(taken / below)]) == 2
+    captured = capsys.readouterr()
+    assert captured.err == (
+        f"error: cannot write results under {taken / below}: {taken} is a file, not a directory\n"
+    )
+    assert captured.out == "" and taken.read_text() == ""

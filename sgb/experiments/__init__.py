@@ -3,9 +3,9 @@
 Each experiment is registered once, in ``EXPERIMENTS``, by the module that holds
 it, its run function ``run(profile: str, out_dir: Path, **options) -> Path`` (which
 writes a results file with provenance and returns its path), its profiles
-(a dict profile name -> the config that ``run`` uses at that profile), and what
-``python -m sgb reproduce --help`` says of it: the paper figure, the datasets or
-environments, and the cost of each profile.
+(a dict profile name -> the config that ``run`` uses at that profile), the chapter of
+the book it belongs to (``CHAPTERS``), and what ``python -m sgb reproduce --help`` says
+of it: the paper figure, the datasets or environments, and the cost of each profile.
 """
 
 import importlib
@@ -16,17 +16,28 @@ from pathlib import Path
 from typing import Any
 
 PROFILE_NAMES = ("smoke", "cpu", "paper")
+DEFAULT_PROFILE = "smoke"
+# The book's chapters that run experiments (book/0N_*.ipynb), by number.
+CHAPTERS = {
+    2: "Bayes by backprop",
+    3: "The Jensen gap",
+    4: "DGB versus SGB under compression",
+    5: "Populations of walkers: SGB agents in Brax",
+    6: "Beyond the paper",
+}
 
 
 @dataclass(frozen=True)
 class Experiment:
-    """Where an experiment lives (a module under sgb.experiments and two of its names) and
-    what ``--help`` says of it: its paper figure, its inputs and its cost per profile."""
+    """Where an experiment lives (a module under sgb.experiments and two of its names), its
+    chapter (a key of ``CHAPTERS``) and what ``--help`` says of it: its paper figure, its
+    inputs and its cost per profile."""
 
     module: str
     run_name: str = "run"
     profiles_name: str = "PROFILES"
-    figure: str = ""  # the paper figure (or the chapter) it reproduces
+    chapter: int = field(kw_only=True)
+    figure: str = ""  # the paper figure it reproduces, or what it adds to the paper
     inputs: str = ""  # its datasets or environments, and the option that picks one
     costs: dict[str, str] = field(default_factory=dict)  # profile -> what a run costs
     shares_runs: bool = False  # its runs take locks, so several workers can share it
@@ -55,7 +66,8 @@ _SHARED = "on 2 CPU cores busy with other runs"
 EXPERIMENTS: dict[str, Experiment] = {
     "bbb": Experiment(
         "bayes_by_backprop",
-        figure="chapter 2, Bayes by backprop (the method; no paper figure)",
+        chapter=2,
+        figure="Bayes by backprop (the method; no paper figure)",
         inputs="a toy 1-D regression and the digits data (both offline)",
         costs={
             "smoke": f"41 s {_SHARED}",
@@ -65,6 +77,7 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "theory": Experiment(
         "theory",
+        chapter=3,
         figure="Fig. 6, the Jensen gap on 1-D toy losses, and on trained SGB classifiers",
         inputs="toy losses and the digits data (offline)",
         costs={
@@ -75,6 +88,7 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "fig2": Experiment(
         "fig2",
+        chapter=4,
         figure="Fig. 2, innate accuracy of the DGB and the SGB across compression",
         inputs="--dataset digits or mnist1d (offline, every profile), fashion-mnist or "
         "mnist (cpu and paper; the Debian package or a download), cifar10 (paper; download)",
@@ -87,7 +101,8 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "dgb_budget": Experiment(
         "dgb_budget",
-        figure="chapter 4, beyond Fig. 2: the DGB at the lowest compression trained for "
+        chapter=4,
+        figure="beyond Fig. 2: the DGB at the lowest compression trained for "
         "the authors' budget, and the uncompressed network at the same budget",
         inputs="fashion-mnist (cpu and paper), digits (smoke)",
         costs={
@@ -98,8 +113,9 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "dgb_full": Experiment(
         "dgb_full",
+        chapter=4,
         figure="Fig. 2's DGB as the authors ran it (their g-net layout, 500 rounds, best "
-        "validation) at 200x, 400x and 700x, 3 seeds (chapter 4)",
+        "validation) at 200x, 400x and 700x, 3 seeds",
         inputs="fashion-mnist (cpu and paper), digits (smoke)",
         costs={
             "smoke": "one cell of 4 rounds, not measured",
@@ -111,9 +127,10 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "sgb_full": Experiment(
         "sgb_full",
+        chapter=4,
         figure="Fig. 2's SGB as the paper and the authors train it (50 epochs, 3 weight "
         "draws, rho from -7), also with the KL per type pair and with rho from -5, at all "
-        "7 ratios x 3 seeds (chapter 4)",
+        "7 ratios x 3 seeds",
         inputs="fashion-mnist (cpu and paper), digits (smoke)",
         costs={
             "smoke": "3 cells of one epoch, not measured",
@@ -127,6 +144,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         "rl",
         "run_fig3",
         "FIG3_PROFILES",
+        chapter=5,
         figure="Fig. 3, return against the number of cell types (Brax PPO)",
         inputs="--env ant (default) or halfcheetah",
         costs={
@@ -142,6 +160,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         "rl",
         "run_fig4",
         "FIG4_PROFILES",
+        chapter=5,
         figure="Fig. 4E/F, individuals of one genome on normal and long legs, on two niches",
         inputs="--env ant (Ant bodies and worlds); evaluates Fig. 3's 64-type seed-0 "
         "checkpoint (the committed cpu one at smoke and cpu)",
@@ -155,6 +174,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         "rl",
         "run_fig5",
         "FIG5_PROFILES",
+        chapter=5,
         figure="Fig. 5, sampled individuals against the mean network",
         inputs="--env ant; the same checkpoint as fig4",
         costs={
@@ -165,7 +185,8 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "bet_hedging": Experiment(
         "bet_hedging",
-        figure="chapter 6, bet-hedging: a genome's individuals against clones of its mean "
+        chapter=6,
+        figure="bet-hedging: a genome's individuals against clones of its mean "
         "network in a world that changes among four conditions (the abstract's 'at least "
         "some individuals will survive')",
         inputs="the Ant on normal, long legs, slippery and low gravity; the spread sweep's "
@@ -180,7 +201,8 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "evolution": Experiment(
         "evolution",
-        figure="chapter 6, evolution without gradients: a stochastic genome against a "
+        chapter=6,
+        figure="evolution without gradients: a stochastic genome against a "
         "deterministic one (sigma = 0), both evolved by OpenAI-ES from innate fitness alone",
         inputs="digits (Fashion-MNIST at paper); 2 and 8 hidden types, 5 seeds",
         costs={
@@ -191,7 +213,8 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "innate_start": Experiment(
         "innate_start",
-        figure="chapter 6, innate start then learning: Ant genomes' mean network, best of 100 "
+        chapter=6,
+        figure="innate start then learning: Ant genomes' mean network, best of 100 "
         "and a random individual, fine-tuned with PPO on the long-legged Ant, against a fresh "
         "network",
         inputs="--env ant; Fig. 3's 64-type seed-0 checkpoints (ours, the authors' settings, "
@@ -208,7 +231,8 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "innate_start_supervised": Experiment(
         "innate_start_supervised",
-        figure="chapter 6, innate start then learning, supervised: 10 SGB individuals, their "
+        chapter=6,
+        figure="innate start then learning, supervised: 10 SGB individuals, their "
         "mean network and 10 fresh networks, each fine-tuned for one epoch as a plain MLP",
         inputs="Fashion-MNIST (digits at smoke); Fig. 2's cpu SGB at 10x, 3 seeds",
         costs={
@@ -220,6 +244,7 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "mean_gap": Experiment(
         "mean_gap",
+        chapter=4,
         figure="why Fig. 2's SGB individuals beat their mean network: the moment-matched "
         "mean network beside both",
         inputs="Fashion-MNIST (digits at smoke); fig2's cells at 10x and 400x, and 10x from "
@@ -232,8 +257,9 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "regime": Experiment(
         "regime",
+        chapter=5,
         figure="Fig. 3C at the paper's 5 x 10^7 steps under the authors' own training "
-        "regime, 5 seeds per point, and the genomes of Figs. 4E and 5 (chapter 5)",
+        "regime, 5 seeds per point, and the genomes of Figs. 4E and 5",
         inputs="the Ant (spring)",
         costs={
             "smoke": f"2 runs of 320 steps, 76 s {_TWO_CORES}",
@@ -246,8 +272,9 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "regime_gait": Experiment(
         "regime_gait",
+        chapter=5,
         figure="whether the agents of Fig. 3C at 5 x 10^7 steps walk: each regime run's "
-        "forward velocity on the authors' evaluation window (chapter 5)",
+        "forward velocity on the authors' evaluation window",
         inputs="the regime's checkpoints (at smoke, of `reproduce regime --profile smoke` "
         "in the same results directory)",
         costs={
@@ -258,6 +285,7 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "populations": Experiment(
         "populations",
+        chapter=5,
         figure="beyond Fig. 4E and 5: individuals of 6 genomes (ours and the authors', 64 "
         "types), 32 episodes each, on normal and long legs, against their mean networks",
         inputs="--env ant; evaluates Fig. 3's 64-type checkpoints, seeds 0 to 2 of both "
@@ -272,6 +300,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         "populations",
         "run_regime",
         "REGIME_PROFILES",
+        chapter=5,
         figure="Fig. 4E and 5 on the 64-type genome of the authors' regime at 5e7 steps: "
         "100 individuals x 64 episodes, our protocol (deterministic actions, the mean "
         "network on the same states) and theirs (sampled actions, their one-sample t "
@@ -286,6 +315,7 @@ EXPERIMENTS: dict[str, Experiment] = {
     ),
     "spread": Experiment(
         "rl_spread",
+        chapter=5,
         figure="beyond Fig. 5: individuals against the mean network across initial spreads",
         inputs="--env ant",
         costs={
@@ -313,5 +343,5 @@ def check_profile(profile: str) -> str:
 
 
 def profile_from_env() -> str:
-    """The profile named by the environment variable ``SGB_PROFILE`` (default "smoke")."""
-    return check_profile(os.environ.get("SGB_PROFILE", "smoke"))
+    """The profile named by the environment variable ``SGB_PROFILE`` (default smoke)."""
+    return check_profile(os.environ.get("SGB_PROFILE", DEFAULT_PROFILE))
