@@ -3,6 +3,8 @@
 #   make test   ruff, every notebook and the unit tests (nbmake; the chapters first, so the
 #               longest items start early on the workers; tests marked with one xdist_group
 #               run on one worker, where they share compiled programs)
+#   make grid   start the background queue of long runs: a worker per core at idle priority
+#               in a worktree of HEAD (python -m sgb grid status|land|stop; sgb/grid.py)
 #   make reproduce EXPERIMENT=... ARGS=...   one experiment, in the same environment (results
 #               in $SGB_RESULTS, else ./sgb-results; ARGS=--maintainer-write-committed writes
 #               the committed results/ instead)
@@ -18,7 +20,7 @@ export PATH := $(CURDIR)/$(BIN):$(PATH)
 export VIRTUAL_ENV := $(CURDIR)/$(VENV)
 export SGB_PROFILE := smoke
 
-.PHONY: venv test book reproduce clean distclean
+.PHONY: venv test book grid reproduce clean distclean
 
 venv: $(STAMP)
 
@@ -39,6 +41,9 @@ test: venv
 book: venv
 	XLA_FLAGS="$$($(BIN)/python -c 'import conftest, os; print(os.environ["XLA_FLAGS"])')" \
 	    $(BIN)/jupyter-book build . -W --keep-going
+
+grid: venv
+	$(BIN)/python -m sgb grid start
 
 # make reproduce EXPERIMENT=fig3 ARGS="--profile cpu --env ant"   (python -m sgb reproduce --help)
 reproduce: venv

@@ -1,4 +1,5 @@
-"""Command line: ``python -m sgb reproduce EXPERIMENT --profile smoke|cpu|paper [options]``.
+"""Command line: ``python -m sgb reproduce EXPERIMENT --profile smoke|cpu|paper [options]``,
+and ``python -m sgb grid ...``, the background queue of long runs (``sgb.grid``).
 
 The arguments are checked before anything runs; the paper profile is refused where JAX
 finds no GPU on this machine (without ``--ray``: a cluster's machines run it), unless
@@ -141,6 +142,12 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=experiments_help(),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    commands.add_parser(
+        "grid",
+        help="the background queue of long runs: start, status, land, stop "
+        "(python -m sgb grid --help)",
+        add_help=False,
+    )
     reproduce.add_argument("experiment", choices=list(EXPERIMENTS))
     reproduce.add_argument(
         "--profile",
@@ -239,6 +246,11 @@ def check_backend(profile: str, force_cpu: bool) -> None:
 def main(argv: list[str] | None = None) -> int:
     """``python -m sgb`` with ``argv``; its exit status (2 for bad arguments, 1 for a failed
     run)."""
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["grid"]:
+        from sgb import grid
+
+        return grid.main(argv[1:])
     args = build_parser().parse_args(argv)
     options = {k: v for k, v in (("dataset", args.dataset), ("env", args.env)) if v is not None}
     experiment = get_experiment(args.experiment)

@@ -2,7 +2,8 @@
 
 ``save(path, state, run, progress)`` writes every array leaf of the pytree ``state``,
 the identity of the run (``run``: its configuration and seed, JSON) and how far it got
-(``progress``, JSON) to one ``.npz`` file, atomically. ``load(path, template, run)``
+(``progress``, JSON) to one ``.npz`` file, atomically. ``peek(path)`` reads back the run
+and its progress alone. ``load(path, template, run)``
 rebuilds the state on the tree structure of ``template`` (a freshly initialised state of
 the same run) and refuses a file written by another run, naming the file. Typed PRNG
 keys are stored as their key data.
@@ -49,6 +50,20 @@ def save(path: str | Path, state: Any, run: dict, progress: dict) -> Path:
     buffer = io.BytesIO()
     np.savez(buffer, meta=np.array(meta), **arrays)
     return atomic_write(path, buffer.getvalue())
+
+
+def peek(path: str | Path) -> tuple[dict, dict]:
+    """The run and progress saved at ``path``, without its arrays; a ``CorruptFile`` if it
+    cannot be read."""
+    path = Path(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            meta = json.loads(str(data["meta"]))
+    except _READ_ERRORS as error:
+        raise CorruptFile(path, f"is unreadable ({error!r})", RESTART, _WHAT) from error
+    if not isinstance(meta, dict) or not {"run", "progress"} <= set(meta):
+        raise CorruptFile(path, "has no run or progress in its meta", RESTART, _WHAT)
+    return meta["run"], meta["progress"]
 
 
 def load(

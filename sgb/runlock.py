@@ -7,6 +7,9 @@ file that several processes update, such as a sweep's results file). The operati
 system releases a lock when its process ends, killed or not, so a run left by a dead
 process is free for the next one to resume.
 
+``holder(path)`` says which process holds the lock of ``path``, without taking it (from
+Linux's ``/proc/locks``), so that a listing of a sweep cannot take a run from a worker.
+
 ``path`` is a ``str`` or an ``os.PathLike``, anything else a ``TypeError``. Locks do not
 nest: taking the lock of a path inside a ``with`` block that holds it (``claim`` or
 ``exclusive``, in the same thread) is a ``RuntimeError``, where it would otherwise
@@ -71,3 +74,25 @@ def exclusive(path: str | os.PathLike) -> Iterator[None]:
     """Hold the lock of ``path`` for the ``with`` block, waiting while another process does."""
     with _locked(path, blocking=True):
         yield
+
+
+PROC_LOCKS = Path("/proc/locks")
+
+
+def holder(path: str | os.PathLike) -> int | None:
+    """The process id holding the lock of ``path`` (``claim``, ``exclusive``), ``None`` if
+    none does or this system has no ``/proc/locks``; takes no lock itself."""
+    lock = Path(f"{os.fspath(validation.path('path', path))}.lock")
+    try:
+        stat = lock.stat()
+        table = PROC_LOCKS.read_text()
+    except OSError:
+        return None
+    inode = f"{os.major(stat.st_dev):02x}:{os.minor(stat.st_dev):02x}:{stat.st_ino}"
+    for line in table.splitlines():
+        # "1: FLOCK  ADVISORY  WRITE 1234 08:01:5678 0 EOF"; a blocked waiter's id has "->"
+        fields = line.split()
+        if len(fields) >= 6 and fields[1] == "FLOCK" and "->" not in fields[0]:
+            if fields[5] == inode:
+                return int(fields[4])
+    return None

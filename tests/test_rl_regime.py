@@ -342,3 +342,35 @@ def test_the_window_gait_plays_the_window_of_the_return_and_measures_its_velocit
     assert record["forward_velocity"] == pytest.approx(0.1 * direction, rel=1e-6)
     assert record["walks"] is (direction > 0)
     assert record["window_return"] == float(ret)
+
+
+def test_smaller_intermediate_evaluations_leave_what_is_trained_bit_for_bit(monkeypatch):
+    """Intermediate evaluations on 2 environments instead of all: the same parameters, bit for
+    bit, and the same last evaluation; the evaluations before it play 2 environments."""
+    config = replace(
+        _authors(NetworkConfig(hidden=(8,)), total_steps=2 * 2 * 4 * 5 * 2),
+        num_evals=2,
+        eval_at_start=True,
+    )
+    everywhere = train(config, seed=2, progress=False)
+    trainer = make_trainer(config.step_settings())
+    real, sizes = trainer.window_return, []
+
+    def counted(params, normalizer, key, n_envs):
+        sizes.append(n_envs)
+        return real(params, normalizer, key, n_envs)
+
+    monkeypatch.setitem(trainer.__dict__, "window_return", counted)
+    cheaper = replace(config, interim_eval_individuals=2)
+    interim = train(cheaper, seed=2, progress=False)
+    assert sizes == [2, 2, config.eval_individuals] and config.eval_individuals > 2
+    assert interim.eval_returns[-1] == everywhere.eval_returns[-1]
+    assert interim.eval_steps == everywhere.eval_steps
+    for a, b in zip(
+        jax.tree_util.tree_leaves(interim.params),
+        jax.tree_util.tree_leaves(everywhere.params),
+        strict=True,
+    ):
+        np.testing.assert_array_equal(a, b)
+    assert cheaper.trains_as(config) and config.trains_as(cheaper)
+    assert not cheaper.trains_as(replace(config, eval_individuals=2))

@@ -232,7 +232,8 @@ def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str, label
 
 def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
     """The record kept in ``checkpoint`` if it holds a run trained with ``ppo`` (``None``
-    if there is none, or it was trained with other settings): its learning curve, its
+    if there is none, or it was trained with other settings; its intermediate evaluations
+    may have had another size, ``PPOConfig.trains_as``): its learning curve, its
     scores (the last evaluation; the mean of the last two), its speed, wall time and
     the commit and date it was trained at. A damaged checkpoint counts as none (it is said
     so), so that the sweep trains the run again."""
@@ -243,7 +244,7 @@ def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
     except validation.CorruptFile as error:
         print(f"{error}: it is trained again", flush=True)
         return None
-    if config != ppo:
+    if not config.trains_as(ppo):
         return None
     returns = meta["eval_returns"]
     trained = meta.get("provenance", {})

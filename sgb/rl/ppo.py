@@ -9,7 +9,7 @@ start fresh).
 """
 
 import time
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
 from typing import NamedTuple
 
@@ -41,6 +41,9 @@ class PPOConfig:
     (``Trainer.window_return``) over ``eval_individuals`` environments, each step a new draw.
     ``entropy_draw`` is how the loss draws the entropy's action (``sgb.rl.losses``);
     ``eval_at_start`` evaluates the initial parameters too, at step 0, as the authors do.
+    ``interim_eval_individuals`` (``None``: ``eval_individuals``) is how many the evaluations
+    before the last use: what a run trains does not depend on it (``trains_as``), only what
+    its intermediate evaluations cost and how precise they are.
     """
 
     env: EnvSpec = field(default_factory=EnvSpec)
@@ -65,6 +68,7 @@ class PPOConfig:
     unrolls_per_iteration: int = 1
     entropy_draw: str = "reparameterised"
     eval_at_start: bool = False
+    interim_eval_individuals: int | None = None
 
     def __post_init__(self) -> None:
         validation.instance("env", self.env, EnvSpec)
@@ -91,6 +95,8 @@ class PPOConfig:
         validation.choice("regime", self.regime, REGIMES)
         validation.choice("entropy_draw", self.entropy_draw, ENTROPY_DRAWS)
         validation.instance("eval_at_start", self.eval_at_start, bool)
+        if self.interim_eval_individuals is not None:
+            validation.integer("interim_eval_individuals", self.interim_eval_individuals)
         if self.regime == "ours" and self.unrolls_per_iteration != 1:
             raise ValueError("our regime collects one unroll per iteration")
         sequences = self.num_envs * self.unrolls_per_iteration
@@ -104,6 +110,19 @@ class PPOConfig:
                 f"total_steps={self.total_steps} must hold at least one iteration of "
                 f"{self.steps_per_iteration} steps per evaluation (num_evals={self.num_evals})"
             )
+
+    def eval_size(self, last: bool) -> int:
+        """Individuals (environments, under the authors' regime) of the last evaluation
+        (``last``) or of one before it."""
+        if last or self.interim_eval_individuals is None:
+            return self.eval_individuals
+        return self.interim_eval_individuals
+
+    def trains_as(self, other: "PPOConfig") -> bool:
+        """Whether ``other`` trains what this config trains and scores it with the same last
+        evaluation: the two differ at most in their intermediate evaluations' size."""
+        validation.instance("other", other, PPOConfig)
+        return replace(self, interim_eval_individuals=other.interim_eval_individuals) == other
 
     @property
     def steps_per_iteration(self) -> int:
@@ -227,21 +246,24 @@ def _guard(holder: dict) -> Guard:
     return Guard("PPO loss", cause=cause)
 
 
-def evaluate(config: PPOConfig, params: Params, normalizer: Normalizer, seed: int) -> float:
-    """Mean innate return of ``eval_individuals`` individuals, one full episode each; under
-    the authors' regime, their window return over ``eval_individuals`` environments."""
+def evaluate(
+    config: PPOConfig, params: Params, normalizer: Normalizer, seed: int, last: bool = True
+) -> float:
+    """Mean innate return of ``config.eval_size(last)`` individuals, one full episode each;
+    under the authors' regime, their window return over as many environments."""
     validation.instance("config", config, PPOConfig)
     validation.instance("params", params, Params)
+    size = config.eval_size(last)
     if config.regime == "authors":
         trainer = make_trainer(config.step_settings())
         key = jax.random.PRNGKey(validation.seed("seed", seed))
-        return float(trainer.window_return(params, normalizer, key, config.eval_individuals))
+        return float(trainer.window_return(params, normalizer, key, size))
     returns = population_returns(
         config.env,
         config.network,
         params.actor,
         normalizer,
-        config.eval_individuals,
+        size,
         1,
         config.episode_length,
         seed=seed,
@@ -319,7 +341,8 @@ def train(
     trainer = make_trainer(config.step_settings())
     if config.eval_at_start and not done["eval_steps"]:
         done["eval_steps"].append(0)
-        done["eval_returns"].append(evaluate(config, ts.params, ts.normalizer, seed + 9_999))
+        first_return = evaluate(config, ts.params, ts.normalizer, seed + 9_999, last=False)
+        done["eval_returns"].append(first_return)
     for i in tqdm(
         range(first, config.num_evals),
         desc=label,
@@ -335,7 +358,9 @@ def train(
             done["timed_s"] += time.perf_counter() - t0
             done["timed_steps"] += chunk * config.steps_per_iteration
         done["eval_steps"].append((i + 1) * chunk * config.steps_per_iteration)
-        done["eval_returns"].append(evaluate(config, ts.params, ts.normalizer, seed + 10_000 + i))
+        last = i + 1 == config.num_evals
+        ret = evaluate(config, ts.params, ts.normalizer, seed + 10_000 + i, last=last)
+        done["eval_returns"].append(ret)
         done["chunks"] = i + 1
         if state_file is not None:
             elapsed = done["wall_time_s"] + time.perf_counter() - start

@@ -1,0 +1,325 @@
+"""The background queue of long runs: workers that take no CPU anything else wants, a
+listing of every queued run, and landing what the workers did in the repository.
+
+    python -m sgb grid start    # one worker per core, in a worktree of HEAD (make grid)
+    python -m sgb grid status   # every queued run: done, running (chunk, ETA), waiting
+    python -m sgb grid land     # the workers' finished runs and unfinished states, copied in
+    python -m sgb grid stop     # end the workers (a killed run resumes at its last chunk)
+
+The workers run the experiments of ``QUEUE`` in order, at their profile, writing the
+committed results of a worktree of HEAD (``../sgb-grid``, or ``$SGB_GRID``), so that
+every file they write names a clean commit. Each worker is pinned to its own core, runs
+XLA on one thread (``sgb.cluster.one_thread``) and is scheduled at idle priority
+(``SCHED_IDLE``): it runs only when a core would otherwise idle, so a foreground job
+takes the cores as if the workers were not there. Each takes the next run no other
+holds (``sgb.runlock``).
+
+A run saves its state after every chunk (``sgb.resume``). ``land`` copies into this
+checkout the queued runs' finished checkpoints (with their sidecars) and results files
+(entered into the manifest), and the state file of every unfinished run, removing the
+state of a run that has finished: committed, they let a fresh clone on another machine
+resume every run at the chunk it had reached (``start`` makes its worktree from HEAD).
+
+An experiment joins the queue with a function ``queued(profile, results_dir) -> Queue``
+in its module: its results file and its runs, in the order they train.
+"""
+
+import argparse
+import hashlib
+import importlib
+import os
+import shutil
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+from sgb import cluster, resume, runlock
+from sgb.manifest import add
+from sgb.provenance import atomic_write
+
+REPOSITORY = Path(__file__).resolve().parent.parent  # the checkout this package lies in
+GRID_ENV = "SGB_GRID"
+LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
+# The long runs, in the order they train: (experiment, profile).
+QUEUE = (("regime", "cpu"),)
+
+
+@dataclass(frozen=True)
+class QueuedRun:
+    """One run of a queued experiment: its name, its checkpoint (a ``.msgpack`` with its
+    ``.json`` sidecar), its state file while unfinished, its chunks, and, once finished,
+    its wall time (s)."""
+
+    label: str
+    checkpoint: Path
+    state: Path
+    chunks: int
+    finished: bool
+    wall_time_s: float | None = None
+
+
+@dataclass(frozen=True)
+class Queue:
+    """A queued experiment at one profile: its results file and its runs, in order."""
+
+    results: Path
+    runs: tuple[QueuedRun, ...]
+
+
+def worktree() -> Path:
+    """Where the workers run: ``$SGB_GRID``, else ``sgb-grid`` beside this checkout."""
+    return Path(os.environ.get(GRID_ENV, REPOSITORY.parent / "sgb-grid")).resolve()
+
+
+def queues(
+    results_dir: Path, queue: tuple[tuple[str, str], ...] = QUEUE
+) -> Iterator[tuple[str, str, Queue]]:
+    """Every experiment of ``queue``: its name, profile and ``Queue`` under
+    ``results_dir``."""
+    from sgb.experiments import get_experiment
+
+    for name, profile in queue:
+        module = importlib.import_module(f"sgb.experiments.{get_experiment(name).module}")
+        yield name, profile, module.queued(profile, results_dir)
+
+
+# --- the workers ------------------------------------------------------------------------
+
+
+def become_idle(core: int) -> None:
+    """Pin this process to ``core`` and schedule it at idle priority (``SCHED_IDLE``)."""
+    os.sched_setaffinity(0, {core})
+    os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+
+
+def work(core: int, logs: Path) -> int:
+    """A worker: idle on ``core``, it runs the queue's experiments in order, each taking
+    the runs no other worker holds, holding its worker lock meanwhile; an exit status."""
+    from sgb.__main__ import MAINTAINER_FLAG, main
+
+    become_idle(core)
+    with runlock.claim(logs / f"worker-{core}") as mine:
+        if not mine:
+            print(f"a worker on core {core} is running already", flush=True)
+            return 1
+        for name, profile in QUEUE:
+            print(f"worker {core}: {name} --profile {profile}", flush=True)
+            status = main(["reproduce", name, "--profile", profile, MAINTAINER_FLAG])
+            if status:
+                return status
+    return 0
+
+
+def workers(tree: Path) -> dict[int, int]:
+    """The running workers of the worktree ``tree``: core -> process id."""
+    found = {}
+    for lock in sorted((tree / LOGS).glob("worker-*.lock")):
+        pid = runlock.holder(lock.with_suffix(""))
+        if pid is not None:
+            found[int(lock.stem.removeprefix("worker-"))] = pid
+    return found
+
+
+def _git(*args: str, cwd: Path = REPOSITORY) -> str:
+    done = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True)
+    if done.returncode:
+        raise RuntimeError(f"git {' '.join(args)} failed: {done.stderr.strip()}")
+    return done.stdout.strip()
+
+
+def prepare(tree: Path) -> None:
+    """Make ``tree`` a worktree of this checkout's HEAD, refusing where that would lose
+    work: while its workers run, while this checkout's results differ from HEAD, or
+    while ``tree`` holds work not landed here (which is landed first, to be committed)."""
+    if workers(tree):
+        raise RuntimeError(f"workers are running in {tree}: python -m sgb grid status")
+    if _git("status", "--porcelain", "--", "results"):
+        raise RuntimeError(
+            "this checkout's results/ differ from HEAD: commit them (or restore them) first, "
+            "so that the workers start from what the repository holds"
+        )
+    if tree.exists():
+        landed = land(tree / "results", REPOSITORY / "results")
+        if landed.runs or landed.results:
+            raise RuntimeError(
+                f"landed {len(landed.runs) + len(landed.results)} files the last workers left "
+                f"in {tree}; enter its results files (python -m sgb grid land) and commit them "
+                "(git add results && git commit), then start again"
+            )
+        _git("worktree", "remove", "--force", str(tree))
+    _git("worktree", "prune")
+    _git("worktree", "add", "--detach", str(tree), "HEAD")
+
+
+def start(count: int | None = None) -> dict[int, int]:
+    """Start ``count`` workers (default: one per core) in a fresh worktree of HEAD, in
+    the background; core -> process id."""
+    tree = worktree()
+    cores = sorted(os.sched_getaffinity(0))
+    count = len(cores) if count is None else count
+    if not 1 <= count <= len(cores):
+        raise ValueError(f"workers must be between 1 and {len(cores)} (the cores), got {count}")
+    prepare(tree)
+    (tree / LOGS).mkdir(exist_ok=True)
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    env["XLA_FLAGS"] = cluster.one_thread(env.get("XLA_FLAGS", ""))
+    started = {}
+    for core in cores[:count]:
+        log = open(tree / LOGS / f"worker-{core}.log", "a")  # noqa: SIM115 (the child keeps it)
+        command = [sys.executable, "-m", "sgb", "grid", "work", "--core", str(core)]
+        child = subprocess.Popen(
+            command, cwd=tree, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True
+        )
+        started[core] = child.pid
+    return started
+
+
+def stop(tree: Path) -> dict[int, int]:
+    """End the workers of ``tree`` (each run resumes at its last finished chunk)."""
+    running = workers(tree)
+    for pid in running.values():
+        os.kill(pid, signal.SIGTERM)
+    return running
+
+
+# --- the listing ------------------------------------------------------------------------
+
+
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.0f} min"
+
+
+def describe(queue: Queue) -> list[str]:
+    """A line per run of ``queue``: done (its wall time), running (its process, chunk and
+    ETA), or waiting (where it resumes), and a summary line."""
+    times = [r.wall_time_s for r in queue.runs if r.finished and r.wall_time_s]
+    typical = sum(times) / len(times) if times else None
+    lines, left = [], 0.0
+    for r in queue.runs:
+        chunk, spent = 0, 0.0
+        if not r.finished and r.state.exists():
+            progress = resume.peek(r.state)[1]
+            chunk, spent = progress["chunks"], progress["wall_time_s"]
+        per_chunk = spent / chunk if chunk else (typical / r.chunks if typical else None)
+        remaining = None if per_chunk is None else per_chunk * (r.chunks - chunk)
+        pid = None if r.finished else runlock.holder(r.checkpoint)
+        if r.finished:
+            what = f"done ({_hours(r.wall_time_s)})" if r.wall_time_s else "done"
+        elif pid is not None:
+            eta = "ETA unknown" if remaining is None else f"ETA {_hours(remaining)}"
+            what = f"running (pid {pid}): chunk {chunk + 1} of {r.chunks}, {eta}"
+        else:
+            what = f"waiting (resumes at chunk {chunk + 1})" if chunk else "waiting"
+        left += 0.0 if r.finished or remaining is None else remaining
+        lines.append(f"  {r.label}: {what}")
+    done = sum(r.finished for r in queue.runs)
+    lines.append(
+        f"  {done} of {len(queue.runs)} runs done; about {_hours(left)} of one core left"
+        + ("" if typical else " (no finished run to time the waiting ones by)")
+    )
+    return lines
+
+
+# --- landing ----------------------------------------------------------------------------
+
+
+def _same(a: Path, b: Path) -> bool:
+    if not b.exists():
+        return False
+    return hashlib.sha256(a.read_bytes()).digest() == hashlib.sha256(b.read_bytes()).digest()
+
+
+def _copy(source: Path, target: Path) -> bool:
+    """Copy ``source`` over ``target`` atomically unless they hold the same bytes."""
+    if _same(source, target):
+        return False
+    atomic_write(target, source.read_bytes())
+    shutil.copystat(source, target)
+    return True
+
+
+class Landed(NamedTuple):
+    """What ``land`` changed: checkpoints, sidecars and state files (copied or removed),
+    and results files."""
+
+    runs: list[Path]
+    results: list[Path]
+
+
+def land(source: Path, target: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> Landed:
+    """Copy from the results directory ``source`` (the workers') into ``target`` what the
+    runs of ``queue`` did: each finished run's checkpoint and sidecar (and its state file
+    removed from ``target``), each unfinished run's latest state, and each queued
+    experiment's results file; a finished run whose lock is still held (being saved) is
+    left for the next landing."""
+    changed: list[Path] = []
+    results: list[Path] = []
+    for _, _, queued in queues(source, queue):
+        for r in queued.runs:
+            if runlock.holder(r.checkpoint) is not None and r.finished:
+                continue  # being written
+            mine = [r.checkpoint, r.checkpoint.with_suffix(".json")] if r.finished else [r.state]
+            for file in mine:
+                if file.exists():
+                    there = target / file.relative_to(source)
+                    if _copy(file, there):
+                        changed.append(there)
+            stale = target / r.state.relative_to(source)
+            if r.finished and stale.exists():
+                stale.unlink()
+                changed.append(stale)
+        there = target / queued.results.relative_to(source)
+        if queued.results.exists() and _copy(queued.results, there):
+            results.append(there)
+    return Landed(changed, results)
+
+
+# --- the command line -------------------------------------------------------------------
+
+
+def main(argv: list[str]) -> int:
+    """``python -m sgb grid start|status|land|stop|work``; an exit status."""
+    parser = argparse.ArgumentParser(prog="python -m sgb grid", description=__doc__.split("\n")[0])
+    verbs = parser.add_subparsers(dest="verb", required=True)
+    begin = verbs.add_parser("start", help="start the workers in a worktree of HEAD")
+    begin.add_argument("--workers", type=int, default=None, help="default: one per core")
+    verbs.add_parser("status", help="list every queued run: done, running, waiting")
+    verbs.add_parser("land", help="copy the workers' finished runs and states in")
+    verbs.add_parser("stop", help="end the workers")
+    one = verbs.add_parser("work", help="be a worker (what start runs on each core)")
+    one.add_argument("--core", type=int, required=True)
+    args = parser.parse_args(argv)
+    tree = worktree()
+    try:
+        if args.verb == "work":
+            return work(args.core, Path.cwd() / LOGS)
+        if args.verb == "start":
+            for core, pid in start(args.workers).items():
+                print(f"worker on core {core}: pid {pid}, log {tree / LOGS}/worker-{core}.log")
+            print("python -m sgb grid status lists the queue; grid land copies its work in")
+        elif args.verb == "stop":
+            print(f"stopped workers {sorted(stop(tree).values())}")
+        elif args.verb == "status":
+            running = workers(tree)
+            print(f"workers in {tree}: {running or 'none running'}")
+            root = tree / "results" if tree.exists() else REPOSITORY / "results"
+            for name, profile, queue in queues(root):
+                print(f"{name} --profile {profile} ({queue.results.name}):")
+                print("\n".join(describe(queue)))
+        else:
+            landed = land(tree / "results", REPOSITORY / "results")
+            entered = add(landed.results) if landed.results else []
+            for path in landed.runs + landed.results:
+                print(f"landed {path.relative_to(REPOSITORY)}")
+            print(
+                f"{len(entered)} results files entered into the manifest; commit what landed: "
+                "git add results && git commit"
+            )
+    except (ValueError, RuntimeError) as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    return 0

@@ -1,0 +1,111 @@
+"""The background queue (``sgb.grid``): its workers run at idle priority on their own core,
+its listing reads who holds a run without taking it, and a run's state landed in the
+repository lets a fresh copy resume it at the chunk it had reached, bit for bit."""
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import jax
+import numpy as np
+import pytest
+
+from sgb import grid, runlock
+from sgb.experiments import regime
+from sgb.rl import checkpoints
+from sgb.rl.trainer import make_trainer
+
+SMOKE = (("regime", "smoke"),)
+
+
+def test_a_worker_runs_at_idle_priority_on_its_own_core():
+    core = max(os.sched_getaffinity(0))
+    code = textwrap.dedent(f"""
+        import os
+        from sgb import grid
+        grid.become_idle({core})
+        print(os.sched_getscheduler(0) == os.SCHED_IDLE, sorted(os.sched_getaffinity(0)))
+    """)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split(maxsplit=1) == ["True", f"[{core}]\n"]
+
+
+def test_the_holder_of_a_run_is_read_without_taking_its_lock(tmp_path):
+    run = tmp_path / "run.msgpack"
+    code = textwrap.dedent(f"""
+        import sys, time
+        from sgb import runlock
+        with runlock.claim({str(run)!r}) as mine:
+            print(mine, flush=True)
+            sys.stdin.readline()
+    """)
+    child = subprocess.Popen(
+        [sys.executable, "-c", code], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert child.stdout.readline() == "True\n"
+        assert runlock.holder(run) == child.pid
+        with runlock.claim(run) as mine:
+            assert not mine  # the child still holds it: reading it took nothing
+    finally:
+        child.communicate("\n")
+    assert runlock.holder(run) is None
+    with runlock.claim(run) as mine:
+        assert mine
+
+
+def _curve(results: Path, name: str) -> tuple[list[float], list[np.ndarray]]:
+    """The learning curve and parameters of checkpoint ``name`` under ``results``."""
+    _, params, _, meta = checkpoints.load(results / "rl" / "checkpoints" / name)
+    return meta["eval_returns"], [np.asarray(x) for x in jax.tree_util.tree_leaves(params)]
+
+
+def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, monkeypatch, capsys):
+    """Workers' results (a run killed in its second chunk) are landed in the repository; a
+    fresh copy of it resumes the run at its second chunk, and the run ends as one never
+    stopped; landed again, the finished run replaces its state."""
+    config = regime.PROFILES["smoke"]
+    vanilla = regime.run_config(config, config.runs[0])
+    name = regime.checkpoint_name(config.runs[0], "smoke")
+    uninterrupted = tmp_path / "uninterrupted"
+    regime.run("smoke", uninterrupted)
+
+    trainer = make_trainer(vanilla.step_settings())
+    real, calls = trainer.iterations, []
+
+    def killed_in_the_second_chunk(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    workers, repository = tmp_path / "worktree", tmp_path / "repository"
+    monkeypatch.setitem(trainer.__dict__, "iterations", killed_in_the_second_chunk)
+    with pytest.raises(KeyboardInterrupt):
+        regime.run("smoke", workers)
+    monkeypatch.setitem(trainer.__dict__, "iterations", real)
+
+    landed = grid.land(workers, repository, SMOKE)
+    state = repository / "rl" / "checkpoints" / name.replace(".msgpack", ".state.npz")
+    assert landed.runs == [state] and landed.results == []
+    listing = grid.describe(next(grid.queues(repository, SMOKE))[2])
+    assert listing[0] == "  vanilla seed 0: waiting (resumes at chunk 2)"
+
+    clone = tmp_path / "clone"
+    shutil.copytree(repository, clone)
+    capsys.readouterr()
+    regime.run("smoke", clone)
+    assert "vanilla seed 0 (1/2): resumed" in capsys.readouterr().out
+    resumed, fresh = _curve(clone, name), _curve(uninterrupted, name)
+    assert resumed[0] == fresh[0]
+    for a, b in zip(resumed[1], fresh[1], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+    again = grid.land(clone, repository, SMOKE)
+    assert not state.exists() and state in again.runs
+    assert again.results == [repository / "rl" / "regime_ant_smoke.json"]
+    listing = grid.describe(next(grid.queues(repository, SMOKE))[2])
+    assert [line.split(": ")[1].split(" (")[0] for line in listing[:2]] == ["done", "done"]
