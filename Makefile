@@ -1,5 +1,6 @@
 # The two commands of the README, each doing its own set-up:
-#   make book   build the book, executing every chapter at the smoke profile (_build/html)
+#   make book   build the book, executing every chapter at the smoke profile (_build/html),
+#               and its downloads (_build/html/downloads: wheel, pins, chapters for Colab)
 #   make test   ruff, every notebook and the unit tests (nbmake; the chapters first, so the
 #               longest items start early on the workers; tests marked with one xdist_group
 #               run on one worker, where they share compiled programs)
@@ -38,9 +39,16 @@ test: venv
 	$(BIN)/python -m pytest -n $(JOBS) --dist loadgroup --nbmake --nbmake-timeout=900 book tests
 
 # The smoke build compiles as fast as the tests do (conftest.FAST_COMPILE_FLAGS).
+# Then the downloads of "Run it yourself": the wheel, the pins, and every chapter with the
+# numbers, figure numbers, citations and captions of the build written in (sgb.colab; the
+# build fails if any role text is left).
 book: venv
 	XLA_FLAGS="$$($(BIN)/python -c 'import conftest, os; print(os.environ["XLA_FLAGS"])')" \
 	    $(BIN)/jupyter-book build . -W --keep-going
+	rm -rf _build/html/downloads
+	$(BIN)/python -m pip wheel -q --no-deps --disable-pip-version-check -w _build/html/downloads .
+	cp requirements.txt _build/html/downloads/
+	$(BIN)/python -m sgb.colab _build _build/html/downloads
 
 grid: venv
 	$(BIN)/python -m sgb grid start

@@ -33,6 +33,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -306,6 +307,8 @@ def main(argv: list[str]) -> int:
     one.add_argument("--core", type=int, required=True)
     args = parser.parse_args(argv)
     tree = worktree()
+    # Brax warns, on import, that it is no longer maintained (the book says so, chapter 5)
+    warnings.filterwarnings("ignore", message="Brax System", category=UserWarning)
     try:
         if args.verb == "work":
             return work(args.core, Path.cwd() / LOGS)

@@ -20,9 +20,12 @@ DISTRIBUTION = "sgb-companion"
 STACK = ("jax", "jaxlib", "flax", "optax", "brax", "mujoco", "mujoco-mjx")
 
 TEMPLATE = """\
-# On Colab (or with SGB_WHEEL set) install the sgb package of this book's git ref. Only the
-# JAX, Brax and MuJoCo stack is put at the book's pins; every other package stays as the
-# runtime has it. Written by tools/install_cell.py from _config.yml.
+# On Colab (or with SGB_WHEEL set, or a wheel of the book beside this notebook) install the
+# sgb package: the wheel and requirements.txt downloaded from the book and uploaded next to
+# the notebook if they are there, else the book's git ref. Only the JAX, Brax and MuJoCo
+# stack is put at the book's pins; every other package stays as the runtime has it.
+# Written by tools/install_cell.py from _config.yml.
+import glob
 import os
 import shutil
 import subprocess
@@ -32,7 +35,8 @@ REF = "{ref}"
 PACKAGE = "{distribution} @ git+{url}@" + REF
 PINS = "{raw}/" + REF + "/requirements.txt"
 STACK = {stack}
-if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ:
+UPLOADED = sorted(glob.glob("{wheel}-*.whl"))  # the newest last
+if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ or UPLOADED:
     import importlib
     import importlib.metadata as metadata
     import re
@@ -49,8 +53,9 @@ if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ:
             versions.setdefault(name(dist.metadata["Name"]), dist.version)
         return versions
 
-    package = os.environ.get("SGB_WHEEL", PACKAGE)
-    source = os.environ.get("SGB_CONSTRAINTS", PINS)
+    local = os.path.exists("requirements.txt")
+    package = os.environ.get("SGB_WHEEL", UPLOADED[-1] if UPLOADED else PACKAGE)
+    source = os.environ.get("SGB_CONSTRAINTS", "requirements.txt" if local else PINS)
     try:
         if source.startswith(("https://", "http://")):
             with urllib.request.urlopen(source, timeout=60) as response:
@@ -61,7 +66,8 @@ if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ:
     except OSError as error:
         raise RuntimeError(
             f"cannot read the book's pins from {{source}} ({{error}}); "
-            "point SGB_CONSTRAINTS at a copy of requirements.txt (see the README)"
+            "upload requirements.txt from the book's page 'Run it yourself' next to this "
+            "notebook, or point SGB_CONSTRAINTS at a copy of it"
         ) from error
     pins = [
         line.split("#")[0].strip()
@@ -81,7 +87,8 @@ if "google.colab" in sys.modules or "SGB_WHEEL" in os.environ:
         raise RuntimeError(
             f"installing {{package}} failed (pip exit status {{done.returncode}}) in\\n"
             f"  {{' '.join(pip)}}\\n{{report[-4000:]}}\\n(until the book's repository is public, "
-            "build a wheel with `pip wheel --no-deps .` and set SGB_WHEEL: see the README)"
+            "upload the wheel and requirements.txt from the book's page 'Run it yourself' "
+            "next to this notebook and run it again)"
         )
     if "ERROR" in report or "conflict" in report:
         print("pip reports:\\n" + report[-4000:])
@@ -131,7 +138,12 @@ def cell_source() -> str:
         raise ValueError(f"repository.url must be a GitHub URL, got {url!r}")
     raw = url.replace("https://github.com/", "https://raw.githubusercontent.com/", 1)
     return TEMPLATE.format(
-        ref=ref, distribution=DISTRIBUTION, url=url, raw=raw, stack=_tuple(STACK)
+        ref=ref,
+        distribution=DISTRIBUTION,
+        url=url,
+        raw=raw,
+        stack=_tuple(STACK),
+        wheel=DISTRIBUTION.replace("-", "_"),
     ).rstrip("\n")
 
 

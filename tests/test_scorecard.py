@@ -1,0 +1,73 @@
+"""The scorecard at a glance (``sgb.scorecard``): every committed row lands under one claim,
+a claim's headline is its largest budget's first row, the counts add up, and numbers are
+printed to the precision their interval carries."""
+
+import re
+
+import numpy as np
+import pytest
+
+from sgb import claims, scorecard, verdicts
+from sgb.paths import committed_results
+
+
+def _row(key: str, verdict: str, estimate: float = 1.0, setting: str = "s") -> claims.Row:
+    test = verdicts.estimate_test("Monte Carlo z", estimate, 0.5, 10)
+    return claims.Row(key, "Figure 2", "a claim", setting, "p", 1.0, "", test, "b", verdict, "")
+
+
+def test_every_committed_row_lands_under_one_claim_and_the_counts_add_up():
+    rows = claims.scorecard(committed_results())
+    lines = scorecard.claim_lines(rows)
+    assert sorted(id(r) for line in lines for r in line.rows) == sorted(id(r) for r in rows)
+    assert sum(scorecard.counts(rows).values()) == len(rows)
+    page = scorecard.html(rows)
+    assert page.count('class="sgb-claim"') == len(lines)
+    # one badge per claim line and one per row in the folded tables
+    assert page.count('class="sgb-badge"') == len(lines) + len(rows)
+    widths = [int(w) for w in re.findall(r'<col style="width:(\d+)%">', page)]
+    assert len(widths) == 5 and sum(widths) == 100
+    summary = scorecard.summary_text(rows)
+    assert summary.startswith(f"{len(rows)} rows: ")
+    for verdict, n in scorecard.counts(rows).items():
+        assert f"**{n}** {scorecard.SHORT.get(verdict, verdict)}" in summary
+
+
+def test_a_claims_headline_is_the_first_row_of_its_largest_budget():
+    rows = [
+        _row("fig2.sgb_better_high", verdicts.INCONCLUSIVE, setting="5 epochs"),
+        _row("fig2.full.sgb_better_high", verdicts.CONTRADICTED, setting="full, 200x"),
+        _row("fig2.full.sgb_better_high", verdicts.REPRODUCED, setting="full, 400x"),
+        _row("fig2.dgb_better_low", verdicts.REPRODUCED),
+    ]
+    lines = scorecard.claim_lines(rows)
+    assert [line.headline.key for line in lines] == [
+        "fig2.dgb_better_low",
+        "fig2.full.sgb_better_high",
+    ]
+    assert lines[1].headline.setting == "full, 200x" and len(lines[1].rows) == 3
+    assert scorecard.counts(rows) == {
+        verdicts.REPRODUCED: 2,
+        verdicts.CONTRADICTED: 1,
+        verdicts.INCONCLUSIVE: 1,
+        verdicts.NOT_TESTABLE: 0,
+    }
+    with pytest.raises(ValueError, match="belongs to no claim"):
+        scorecard.claim_lines([_row("fig9.unknown", verdicts.REPRODUCED)])
+
+
+@pytest.mark.parametrize(
+    ("estimate", "low", "high", "text"),
+    [
+        (11.2, 0.966, 21.4, "11 [1, 21]"),
+        (0.1234, 0.1, 0.15, "0.123 [0.100, 0.150]"),
+        (-18.63, -19.84, -17.41, "\u221218.6 [\u221219.8, \u221217.4]"),
+        (6989.0, 5200.4, 8800.0, "6,989 [5,200, 8,800]"),
+    ],
+)
+def test_numbers_carry_the_precision_of_their_interval(estimate, low, high, text):
+    assert scorecard.interval_text(estimate, low, high) == text
+    # two significant digits of the width survive the rounding
+    numbers = re.findall(r"[\u2212\d.,]*\d", text)
+    shown = [float(x.replace("\u2212", "-").replace(",", "")) for x in numbers]
+    assert np.isclose(shown[2] - shown[1], high - low, rtol=0.1)
