@@ -24,15 +24,16 @@ Card = dict[str, list[Row]]  # claims.by_key(claims.scorecard(...))
 
 def row_texts(name: str, row: Row | None, missing: str = NOT_RUN) -> dict[str, str]:
     """A scorecard row as ``{name}_verdict`` (bold), ``_ours`` (estimate with its 95 %
-    interval), ``_detectable`` (the effect detectable at 80 % power, "-" without a test)
-    and ``_decide`` (the budget that would decide); ``missing`` for each without a row."""
+    interval, "no estimate" without a test), ``_detectable`` (the effect detectable at 80 %
+    power, "none" without a test or power) and ``_decide`` (the budget that would decide);
+    ``missing`` for each without a row. Words, not a dash, so that prose reads around them."""
     if row is None:
         return {f"{name}_{part}": missing for part in ROW_PARTS}
     detectable = math.nan if row.test is None else row.test.detectable
     return {
         f"{name}_verdict": f"**{row.verdict}**",
-        f"{name}_ours": row.ours,
-        f"{name}_detectable": "-" if math.isnan(detectable) else f"{detectable:.3g}",
+        f"{name}_ours": "no estimate" if row.test is None else row.ours,
+        f"{name}_detectable": "none" if math.isnan(detectable) else f"{detectable:.3g}",
         f"{name}_decide": row.decide or "nothing more",
     }
 

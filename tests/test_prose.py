@@ -87,7 +87,7 @@ def test_row_texts_read_the_scorecard_row(card):
     assert texts["fall_detectable"] == f"{row.test.detectable:.3g}"
     assert texts["fall_decide"] == (row.decide or "nothing more")
     untested = prose.row_texts("cifar", card["fig2.cifar"][0])
-    assert untested["cifar_detectable"] == "-"
+    assert untested["cifar_detectable"] == "none"
 
 
 def test_missing_rows_and_files_give_the_fallback_texts():

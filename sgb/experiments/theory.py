@@ -388,7 +388,9 @@ def fixed_points(
     out = []
     for classifier, net in zip(config.classifiers, network, strict=True):
         runs = [net.pop("fixed_point")]
-        for epochs in tqdm(config.settle_epochs, desc="settling", disable=not progress):
+        # no bar where there is nothing to settle (smoke): an empty bar says nothing
+        shown = progress and bool(config.settle_epochs)
+        for epochs in tqdm(config.settle_epochs, desc="settling", disable=not shown):
             longer = dataclasses.replace(classifier, epochs=epochs)
             trained = train_and_evaluate(longer, data, progress=False)
             runs.append(fixed_point_record(config, longer, data, trained))
