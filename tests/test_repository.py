@@ -263,6 +263,8 @@ def test_the_wheel_lists_every_package_and_carries_the_committed_results():
         ["git", "ls-files", "results"], cwd=ROOT, capture_output=True, text=True, check=True
     ).stdout.split()
     for path in committed:
+        if path.endswith(".state.npz"):
+            continue  # an unfinished run's state, kept so a clone resumes it (sgb.grid)
         inside = Path(path).relative_to("results")
         assert any(inside.match(p) and len(inside.parts) == len(Path(p).parts) for p in patterns), (
             f"{path} is committed but not shipped in the wheel"
