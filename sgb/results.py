@@ -190,8 +190,8 @@ def dgb_budget_table(results: dict) -> pd.DataFrame:
 def evolution_table(payload: Payload) -> pd.DataFrame:
     """Evolution without gradients (``sgb.experiments.evolution``), one row per cell:
     hidden types, compression (ours), genome, seed, the last generation's mean fitness,
-    the test accuracy of the evolved genome's individuals (their mean and SD) and of its
-    mean network, the evolved spreads' mean sigma and the wall time."""
+    the test accuracy (%) of the evolved genome's individuals (their mean and SD, in
+    points) and of its mean network, the evolved spreads' mean sigma and the wall time."""
     return pd.DataFrame(
         {
             "hidden types": r["hidden_types"],
@@ -199,9 +199,9 @@ def evolution_table(payload: Payload) -> pd.DataFrame:
             "genome": "stochastic" if r["stochastic"] else "deterministic",
             "seed": r["seed"],
             "last fitness": r["mean_fitness"][-1],
-            "individuals": float(np.mean(r["individuals"])),
-            "SD of individuals": float(np.std(r["individuals"], ddof=1)),
-            "mean network": r["mean_network"],
+            "individuals (% accuracy)": 100 * float(np.mean(r["individuals"])),
+            "SD of individuals (points)": 100 * float(np.std(r["individuals"], ddof=1)),
+            "mean network (% accuracy)": 100 * r["mean_network"],
             "sigma": r["sigma_mean"],
             "wall time (s)": r["wall_time_s"],
         }

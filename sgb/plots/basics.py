@@ -62,8 +62,11 @@ def predictive_bands(fit: Mapping[str, np.ndarray], ax=None):
 
 
 def accuracy_comparison(rows: Sequence[Mapping], ax=None):
-    """Innate test accuracy per classifier: mean network, individuals (mean and 95% interval
-    over the sampled individuals and seeds) and the population-averaged prediction."""
+    """Innate test accuracy (%) per classifier: mean network, individuals and the
+    population-averaged prediction, each a point at its mean over the sampled individuals
+    and seeds with its 95 % interval (a t interval; none for a single value). Points, not
+    bars, so the axis need not start at 0 to show the differences; the legend sits below
+    the axes, off the data."""
     variants = list(dict.fromkeys(r["variant"] for r in rows))
     kinds = [
         ("mean_network", "mean network"),
@@ -72,23 +75,21 @@ def accuracy_comparison(rows: Sequence[Mapping], ax=None):
     ]
     colors = [PALETTE["mean_network"], PALETTE["individuals"], PALETTE["sgb"]]
     ax = axes_or_new(ax, figsize=(7.5, 4))
-    width = 0.26
+    offset = 0.2
     for j, ((key, label), color) in enumerate(zip(kinds, colors, strict=True)):
         means, errors = [], []
         for variant in variants:
-            values = np.concatenate(
+            values = 100 * np.concatenate(
                 [np.atleast_1d(r[key]) for r in rows if r["variant"] == variant]
             )
             means.append(values.mean())
             half = scipy_stats.t.ppf(0.975, values.size - 1) * sem(values) if values.size > 1 else 0
             errors.append(half)
-        x = np.arange(len(variants)) + (j - 1) * width
-        ax.bar(x, means, width, yerr=errors, capsize=3, color=color, label=label)
+        x = np.arange(len(variants)) + (j - 1) * offset
+        ax.errorbar(x, means, yerr=errors, fmt="o", capsize=3, color=color, label=label)
     ax.set_xticks(np.arange(len(variants)), variants, fontsize=9)
-    ax.set_ylabel("test accuracy")
-    low = min(min(np.atleast_1d(r[k]).min() for k, _ in kinds) for r in rows)
-    ax.set_ylim(max(0.0, low - 0.1), 1.0)
-    ax.legend(loc="lower right", fontsize=8)
+    ax.set_ylabel("test accuracy (%)")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=3, fontsize=9, frameon=False)
     return ax
 
 
