@@ -381,27 +381,41 @@ def _returns(runs: list[dict], settings: str, k: int | None, score: str) -> np.n
     return np.array([r[score] for r in chosen])
 
 
-def figure3_rows(results: dict, env: str, steps: int, score: str = "last_two_return") -> list[Row]:
-    """Figure 3C/D's level at 128 types and fall near 16, per genome settings, as fractions
-    of the mean vanilla return (each run scored by ``score``)."""
+FIG3_SETTINGS = {"ours": "our genome", "authors": "the authors' genome"}
+REGIME_SETTINGS = {
+    "authors": "the authors' genome and regime",
+    "authors_aliased": "the authors' genome and regime, their aliased type pairs",
+}
+
+
+def figure3_rows(
+    results: dict,
+    env: str,
+    steps: int,
+    score: str = "last_two_return",
+    settings_labels: dict[str, str] = FIG3_SETTINGS,
+    key_infix: str = "",
+) -> list[Row]:
+    """Figure 3C/D's level at 128 types and fall near 16, per genome settings named in
+    ``settings_labels``, as fractions of the mean vanilla return (each run scored by
+    ``score``); keys ``fig3.level_128.{key_infix}{env}`` and ``fig3.fall_16...``."""
     runs = results["runs"]
     vanilla = _returns(runs, "ours", None, score)
-    scale = vanilla.mean()
+    scale = vanilla.mean() if vanilla.size else math.nan
     budget_of = f"{steps / 1e6:g}M steps, seeds: vanilla {vanilla.size}"
     paper_level = {"ant": 0.75, "halfcheetah": 0.45}[env]
     rows = []
     for settings in dict.fromkeys(r["settings"] for r in runs if r["cell_types"] is not None):
-        if settings not in ("ours", "authors"):
+        if settings not in settings_labels:
             continue
         top, bottom = _returns(runs, settings, 128, score), _returns(runs, settings, 16, score)
         if min(top.size, bottom.size, vanilla.size) < 2:
             continue
-        who = "our" if settings == "ours" else "the authors'"
-        label = f"{env}, {who} genome"
+        label = f"{env}, {settings_labels[settings]}"
         budget = f"{budget_of}, 128 types {top.size}, 16 types {bottom.size}"
         rows.append(
             judged(
-                f"fig3.level_128.{env}",
+                f"fig3.level_128.{key_infix}{env}",
                 "Figure 3" + ("C" if env == "ant" else "D"),
                 "at 128 types the SGB falls short of vanilla, to about the paper's fraction",
                 label,
@@ -415,7 +429,7 @@ def figure3_rows(results: dict, env: str, steps: int, score: str = "last_two_ret
         )
         rows.append(
             judged(
-                f"fig3.fall_16.{env}",
+                f"fig3.fall_16.{key_infix}{env}",
                 "Figure 3" + ("C" if env == "ant" else "D"),
                 "the return falls off near 16 types (128 against 16 types)",
                 label,
@@ -428,6 +442,17 @@ def figure3_rows(results: dict, env: str, steps: int, score: str = "last_two_ret
             )
         )
     return rows
+
+
+def regime_rows(results: dict, steps: int) -> list[Row]:
+    """Figure 3C at the paper's budget (``sgb.experiments.regime``): the level at 128 types
+    and the fall to 16 under the authors' regime, each run scored by its last evaluation
+    (the authors' window on all 2,048 training environments); per genome (their Gaussian
+    per pair, and their aliased pairs). Rows appear once each arm has two seeds."""
+    runs = [{**r, "settings": r.get("genome", "authors")} for r in results["runs"]]
+    return figure3_rows(
+        {"runs": runs}, "ant", steps, "final_return", REGIME_SETTINGS, key_infix="regime."
+    )
 
 
 def typing_rows(results: dict, steps: int, score: str = "last_two_return") -> list[Row]:
@@ -1012,6 +1037,9 @@ def scorecard(results_dir: Path) -> list[Row]:
                     rows += typing_rows(payload["results"], steps)
             else:
                 rows.append(untrained_row(env, steps))
+    regime = load("rl/regime_ant_cpu.json")
+    if regime is not None:
+        rows += regime_rows(regime["results"], regime["provenance"]["config"]["ppo"]["total_steps"])
     fig4 = load("rl/fig4_ant_cpu.json")
     if fig4 is not None:
         rows += figure4_rows(fig4["results"]["returns"])

@@ -71,3 +71,30 @@ def test_numbers_carry_the_precision_of_their_interval(estimate, low, high, text
     numbers = re.findall(r"[\u2212\d.,]*\d", text)
     shown = [float(x.replace("\u2212", "-").replace(",", "")) for x in numbers]
     assert np.isclose(shown[2] - shown[1], high - low, rtol=0.1)
+
+
+def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_land():
+    """Synthetic regime runs with a known fall (16 types at an eighth of vanilla, 128 types
+    at vanilla's level): the fall is reproduced, and its row heads the claim, above the
+    2M-step row; with one seed per arm there is no row."""
+    rng = np.random.default_rng(0)
+    levels = {None: 7000.0, 128: 7000.0, 16: 900.0}
+    runs = [
+        {
+            "cell_types": k,
+            "seed": s,
+            "genome": "authors",
+            "final_return": level + rng.normal(0, 300),
+        }
+        for s in range(3)
+        for k, level in levels.items()
+    ]
+    rows = claims.regime_rows({"runs": runs}, 50_000_000)
+    by_key = {r.key: r for r in rows}
+    fall = by_key["fig3.fall_16.regime.ant"]
+    assert fall.verdict == verdicts.REPRODUCED and fall.test.low > 0.7
+    assert "50M steps" in fall.budget
+    assert claims.regime_rows({"runs": [r for r in runs if r["seed"] == 0]}, 50_000_000) == []
+    two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
+    (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
+    assert line.headline is fall
