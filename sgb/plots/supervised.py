@@ -192,5 +192,5 @@ def plot_full_budgets(
     ax.set_xlabel(_AXES["ours"])
     ax.set_ylabel("innate test accuracy (%)")
     ax.set_title(f"{sgb_full['dataset']}: SGB 50 epochs, DGB 500 rounds")
-    ax.legend(fontsize=7, loc="lower left")
+    ax.legend(fontsize=8, loc="lower left")
     return ax

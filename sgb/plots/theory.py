@@ -46,7 +46,7 @@ def figure6(results: dict[str, Any], axes=None) -> np.ndarray:
                 mu[i], loss(mu[i]), marker, color=color, ms=10, mew=2, label=f"{label}: $\\mu$"
             )
         top.set(title=f"{TITLES[name]} loss", xlabel="weight $w$", ylabel="loss $L(w)$")
-        top.legend(fontsize=7, loc="best")
+        top.legend(fontsize=8, loc="best")
         steps = np.arange(mu.size)
         gap, se = _a(run["gap"]), _a(run["gap_stderr"])
         bottom.plot(steps, gap, color=PALETTE["sgb"], label=r"measured $\Delta L$")
@@ -63,7 +63,7 @@ def figure6(results: dict[str, Any], axes=None) -> np.ndarray:
             xlabel="gradient step",
             ylabel=r"$\Delta L = \mathbb{E}[L(\mu + \sigma\epsilon)] - L(\mu)$",
         )
-        bottom.legend(fontsize=7)
+        bottom.legend(fontsize=8)
     return axes
 
 
@@ -85,7 +85,7 @@ def sign_scan(results: dict[str, Any], axes=None) -> np.ndarray:
             ylabel=r"$\Delta L$",
         )
         ax.set_yscale("symlog", linthresh=1e-4)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=8)
     return axes
 
 
@@ -136,7 +136,7 @@ def breakdown(results: dict[str, Any], axes=None) -> np.ndarray:
             xlabel=r"spread $\sigma$",
             ylabel=r"$\Delta L$",
         )
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=8)
     return axes
 
 
@@ -195,7 +195,7 @@ def network_gap(results: dict[str, Any], axes=None) -> np.ndarray:
     for ax in axes:
         ax.set_xticks(scales, [f"{c:g}" for c in scales])
         ax.minorticks_off()
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=8)
     return axes
 
 
@@ -230,7 +230,7 @@ def elbo_toy(results: dict[str, Any], ax=None):
             f"learning rate {toy['learning_rate']:g}"
         ),
     )
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    ax.legend(fontsize=8, ncol=2, loc="lower left")
     return ax
 
 
@@ -287,5 +287,5 @@ def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
                 ylabel=r"learned $\sigma^2$  (weight$^2$)",
                 title=f"types {types_label(net['cell_types'])}, {where}",
             )
-            ax.legend(fontsize=7, loc="upper left")
+            ax.legend(fontsize=8, loc="upper left")
     return axes
