@@ -12,6 +12,7 @@ from pathlib import Path
 import jax
 import numpy as np
 import pytest
+from interrupt import killed_at_chunk
 
 from sgb import grid, runlock
 from sgb.experiments import regime
@@ -84,20 +85,10 @@ def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, m
     uninterrupted = tmp_path / "uninterrupted"
     regime.run("smoke", uninterrupted)
 
-    trainer = make_trainer(vanilla.step_settings())
-    real, calls = trainer.iterations, []
-
-    def killed_in_the_second_chunk(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-        return real(*args, **kwargs)
-
     workers, repository = tmp_path / "worktree", tmp_path / "repository"
-    monkeypatch.setitem(trainer.__dict__, "iterations", killed_in_the_second_chunk)
-    with pytest.raises(KeyboardInterrupt):
+    trainer = make_trainer(vanilla.step_settings())
+    with killed_at_chunk(trainer, 2, monkeypatch), pytest.raises(KeyboardInterrupt):
         regime.run("smoke", workers)
-    monkeypatch.setitem(trainer.__dict__, "iterations", real)
 
     landed = grid.land(workers, repository, SMOKE)
     state = repository / "rl" / "checkpoints" / name.replace(".msgpack", ".state.npz")

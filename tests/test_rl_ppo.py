@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 from brax.envs.base import State
+from interrupt import killed_at_chunk
 from reach import (
     EPISODE,
     SGB_TYPES,
@@ -320,18 +321,8 @@ def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one
     uninterrupted = train(config, seed=2, progress=False)
     state_file = tmp_path / "run.state.npz"
     trainer = make_trainer(config.step_settings())
-    real, calls = trainer.iterations, []
-
-    def killed_at_the_second_chunk(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-        return real(*args, **kwargs)
-
-    monkeypatch.setitem(trainer.__dict__, "iterations", killed_at_the_second_chunk)
-    with pytest.raises(KeyboardInterrupt):
+    with killed_at_chunk(trainer, 2, monkeypatch), pytest.raises(KeyboardInterrupt):
         train(config, seed=2, progress=False, state_file=state_file)
-    monkeypatch.setitem(trainer.__dict__, "iterations", real)
     resumed = train(config, seed=2, progress=False, state_file=state_file)
     assert resumed.eval_steps == uninterrupted.eval_steps
     np.testing.assert_array_equal(resumed.eval_returns, uninterrupted.eval_returns)

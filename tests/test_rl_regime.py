@@ -10,6 +10,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from interrupt import killed_at_chunk
 from reach import SPEC, reach_config
 
 from sgb import genome
@@ -21,6 +22,12 @@ from sgb.rl.normalizer import init_normalizer, normalize, update
 from sgb.rl.ppo import PPOConfig, init_state, initial_params, train
 from sgb.rl.regimes import authors_regime, with_settings
 from sgb.rl.trainer import make_trainer
+
+
+def _assert_same_params(a, b) -> None:
+    """Two parameter trees equal leaf by leaf, bit for bit."""
+    for x, y in zip(jax.tree_util.tree_leaves(a), jax.tree_util.tree_leaves(b), strict=True):
+        np.testing.assert_array_equal(x, y)
 
 
 def _authors(network: NetworkConfig, **kwargs):
@@ -290,19 +297,9 @@ def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path
     )
     uninterrupted = train(config, seed=1, progress=False)
     trainer = make_trainer(config.step_settings())
-    real, calls = trainer.iterations, []
-
-    def killed_at_the_second_chunk(*args, **kwargs):
-        calls.append(1)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-        return real(*args, **kwargs)
-
     state_file = tmp_path / "run.state.npz"
-    monkeypatch.setitem(trainer.__dict__, "iterations", killed_at_the_second_chunk)
-    with pytest.raises(KeyboardInterrupt):
+    with killed_at_chunk(trainer, 2, monkeypatch), pytest.raises(KeyboardInterrupt):
         train(config, seed=1, progress=False, state_file=state_file)
-    monkeypatch.setitem(trainer.__dict__, "iterations", real)
     ts = init_state(config, 1)
     with np.load(state_file) as saved:
         kept = len(saved.files) - 1  # one entry is the meta
@@ -310,12 +307,7 @@ def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path
     assert kept == len(jax.tree_util.tree_leaves(ts)) - env_leaves
     resumed = train(config, seed=1, progress=False, state_file=state_file)
     assert resumed.eval_returns == uninterrupted.eval_returns
-    for a, b in zip(
-        jax.tree_util.tree_leaves(resumed.params),
-        jax.tree_util.tree_leaves(uninterrupted.params),
-        strict=True,
-    ):
-        np.testing.assert_array_equal(a, b)
+    _assert_same_params(resumed.params, uninterrupted.params)
 
 
 @pytest.mark.parametrize("direction", [1.0, -1.0])
@@ -366,11 +358,6 @@ def test_smaller_intermediate_evaluations_leave_what_is_trained_bit_for_bit(monk
     assert sizes == [2, 2, config.eval_individuals] and config.eval_individuals > 2
     assert interim.eval_returns[-1] == everywhere.eval_returns[-1]
     assert interim.eval_steps == everywhere.eval_steps
-    for a, b in zip(
-        jax.tree_util.tree_leaves(interim.params),
-        jax.tree_util.tree_leaves(everywhere.params),
-        strict=True,
-    ):
-        np.testing.assert_array_equal(a, b)
+    _assert_same_params(interim.params, everywhere.params)
     assert cheaper.trains_as(config) and config.trains_as(cheaper)
     assert not cheaper.trains_as(replace(config, eval_individuals=2))
