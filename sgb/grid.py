@@ -26,7 +26,6 @@ in its module: its results file and its runs, in the order they train.
 """
 
 import argparse
-import hashlib
 import importlib
 import os
 import shutil
@@ -240,17 +239,12 @@ def describe(queue: Queue) -> list[str]:
 # --- landing ----------------------------------------------------------------------------
 
 
-def _same(a: Path, b: Path) -> bool:
-    if not b.exists():
-        return False
-    return hashlib.sha256(a.read_bytes()).digest() == hashlib.sha256(b.read_bytes()).digest()
-
-
 def _copy(source: Path, target: Path) -> bool:
     """Copy ``source`` over ``target`` atomically unless they hold the same bytes."""
-    if _same(source, target):
+    data = source.read_bytes()
+    if target.exists() and target.read_bytes() == data:
         return False
-    atomic_write(target, source.read_bytes())
+    atomic_write(target, data)
     shutil.copystat(source, target)
     return True
 

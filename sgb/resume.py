@@ -52,17 +52,25 @@ def save(path: str | Path, state: Any, run: dict, progress: dict) -> Path:
     return atomic_write(path, buffer.getvalue())
 
 
-def peek(path: str | Path) -> tuple[dict, dict]:
-    """The run and progress saved at ``path``, without its arrays; a ``CorruptFile`` if it
-    cannot be read."""
-    path = Path(path)
+def _read(path: Path, arrays: bool) -> tuple[dict, list[np.ndarray]]:
+    """The meta saved at ``path`` (checked to hold a run and a progress) and, with
+    ``arrays``, its array leaves in order; a ``CorruptFile`` if it cannot be read."""
     try:
         with np.load(path, allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
+            count = len(data.files) - 1 if arrays else 0
+            leaves = [np.asarray(data[f"leaf_{i}"]) for i in range(count)]
     except _READ_ERRORS as error:
         raise CorruptFile(path, f"is unreadable ({error!r})", RESTART, _WHAT) from error
     if not isinstance(meta, dict) or not {"run", "progress"} <= set(meta):
         raise CorruptFile(path, "has no run or progress in its meta", RESTART, _WHAT)
+    return meta, leaves
+
+
+def peek(path: str | Path) -> tuple[dict, dict]:
+    """The run and progress saved at ``path``, without its arrays; a ``CorruptFile`` if it
+    cannot be read."""
+    meta, _ = _read(Path(path), arrays=False)
     return meta["run"], meta["progress"]
 
 
@@ -81,15 +89,7 @@ def load(
     ``ValueError``.
     """
     path = Path(path)
-    try:
-        with np.load(path, allow_pickle=False) as data:
-            meta = json.loads(str(data["meta"]))
-            count = len(data.files) - 1
-            arrays = [np.asarray(data[f"leaf_{i}"]) for i in range(count)]
-    except _READ_ERRORS as error:
-        raise CorruptFile(path, f"is unreadable ({error!r})", RESTART, _WHAT) from error
-    if not isinstance(meta, dict) or not {"run", "progress"} <= set(meta):
-        raise CorruptFile(path, "has no run or progress in its meta", RESTART, _WHAT)
+    meta, arrays = _read(path, arrays=True)
     if meta["run"] != run:
         raise ValueError(f"training state {path} belongs to another run: {meta['run']}")
     progress = meta["progress"]
