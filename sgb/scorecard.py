@@ -163,13 +163,14 @@ def _e(text: str) -> str:
 
 
 def _detail_table(line: ClaimLine) -> str:
-    """Every row of a claim: setting, effect, ours, paper, test, power, budget, verdict and
-    what would decide."""
+    """Every row of a claim: setting, effect, ours, paper, the effect compared (the paper's
+    or its stand-in, with why), test, power, budget, verdict and what would decide."""
     head = (
         "setting",
         "effect tested",
         "ours (95 % CI)",
         "paper",
+        "effect compared",
         "test",
         "detectable at 80 % power",
         "budget",
@@ -189,6 +190,7 @@ def _detail_table(line: ClaimLine) -> str:
             _e(r.effect),
             _e(ours_text(r)),
             _e(paper_text(r)),
+            _e(r.compared),
             _e(test),
             _e(detectable),
             _e(r.budget),

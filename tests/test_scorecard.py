@@ -2,6 +2,7 @@
 a claim's headline is its largest budget's first row, the counts add up, and numbers are
 printed to the precision their interval carries."""
 
+import dataclasses
 import re
 
 import numpy as np
@@ -98,3 +99,16 @@ def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_
     two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
     (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
     assert line.headline is fall
+
+
+def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
+    """A row whose effect stands in for a direction says so in words beside the number; a
+    row with the paper's own number says it is the paper's; the page shows both."""
+    rows = claims.scorecard(committed_results())
+    stand_in = next(r for r in rows if r.paper_effect_basis and r.paper_effect is not None)
+    assert stand_in.compared.endswith(f"({stand_in.paper_effect_basis})")
+    own = dataclasses.replace(stand_in, paper_effect=0.25, paper_effect_basis="")
+    assert own.compared == "0.25 (the paper's)"
+    page = scorecard.html(rows)
+    assert "effect compared" in page
+    assert scorecard.html_escape.escape(stand_in.compared) in page
