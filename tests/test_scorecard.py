@@ -112,3 +112,19 @@ def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
     page = scorecard.html(rows)
     assert "effect compared" in page
     assert scorecard.html_escape.escape(stand_in.compared) in page
+
+
+def test_holm_corrects_within_each_figure_and_the_page_names_the_survivors():
+    """Figure 3C and 3D are one family; each row's corrected p is Holm's over its family's
+    p alone; the page counts the reproduced rows whose corrected p stays under 0.05."""
+    rows = claims.scorecard(committed_results())
+    adjusted = scorecard.holm_p(rows)
+    figure3 = [i for i, r in enumerate(rows) if r.figure.startswith("Figure 3")]
+    assert {rows[i].figure for i in figure3} >= {"Figure 3C", "Figure 3D"}
+    expected = verdicts.holm([rows[i].test.p for i in figure3])
+    np.testing.assert_allclose([adjusted[i] for i in figure3], expected)
+    pairs = list(zip(rows, adjusted, strict=True))
+    assert all(q >= r.test.p for r, q in pairs if r.test and not np.isnan(q))
+    reproduced = [q for r, q in pairs if r.verdict == verdicts.REPRODUCED]
+    survive = sum(q < 0.05 for q in reproduced)
+    assert f"**{survive} of the {len(reproduced)}**" in scorecard.holm_text(rows)
