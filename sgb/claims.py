@@ -13,8 +13,10 @@ contradiction and to size the budget is stated in the row (``paper_effect_basis`
 
 import functools
 import math
+import re
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -50,6 +52,35 @@ EFFECTS = {
 }
 
 
+class PaperBudget(NamedTuple):
+    """The paper's budget for a family's claims: in words, and its amount in the unit in
+    which a row states its own (``Row.amount``); ``None`` where the paper ran nothing."""
+
+    text: str
+    amount: float | None = None
+    unit: str = ""
+
+
+PAPER_BUDGETS = {
+    "Figure 2": PaperBudget(
+        "5 seeds; SGB 50 epochs (the paper's table), DGB 500 rounds", 50, "SGB epochs"
+    ),
+    "Figure 3": PaperBudget("5 x 10^7 steps, 5 seeds", 5e7, "steps"),
+    "Figure 4": PaperBudget(
+        "a genome of 5 x 10^7 steps; 100 individuals x 10 episodes", 5e7, "the genome's steps"
+    ),
+    "Figure 5": PaperBudget(
+        "a genome of 5 x 10^7 steps; 100 individuals x 10 episodes, the mean network 1024",
+        5e7,
+        "the genome's steps",
+    ),
+}
+# within this of the paper's amount counts as the paper's budget: the authors' own code runs
+# 49,152,000 steps for its 5 x 10^7 (whole updates of 2048 x 5 x 16 steps)
+AT_BUDGET = 0.95
+NO_PAPER_BUDGET = PaperBudget("none: the paper proves or argues it, and runs nothing")
+
+
 @dataclass(frozen=True)
 class Row:
     """One claim in one setting, and what the evidence says of it."""
@@ -65,6 +96,39 @@ class Row:
     budget: str
     verdict: str
     decide: str
+    amount: float | None = None  # our budget in the unit of the paper's (PAPER_BUDGETS)
+
+    @property
+    def family(self) -> str:
+        """The row's family: its figure without the panel letter ("Figure 3C" and "Figure
+        3D" are "Figure 3"), its theorem, or its chapter."""
+        found = re.match(r"Figure \d+", self.figure)
+        return found.group(0) if found else self.figure
+
+    @property
+    def paper_budget(self) -> PaperBudget:
+        """The paper's budget for this row's claim."""
+        return PAPER_BUDGETS.get(self.family, NO_PAPER_BUDGET)
+
+    @property
+    def share(self) -> float | None:
+        """Our budget as a fraction of the paper's, in the paper's unit (``None`` where
+        either has no amount)."""
+        paper = self.paper_budget.amount
+        return None if self.amount is None or paper is None else self.amount / paper
+
+    @property
+    def below_budget(self) -> str:
+        """ "at N % of the paper's budget (unit)" where this row's budget is below the
+        paper's, else ""."""
+        if self.share is None or self.share >= AT_BUDGET:
+            return ""
+        return f"at {100 * self.share:.2g} % of the paper's budget ({self.paper_budget.unit})"
+
+    @property
+    def budget_text(self) -> str:
+        """The row's budget, with how far below the paper's it is where it is."""
+        return f"{self.budget} ({self.below_budget})" if self.below_budget else self.budget
 
     @property
     def effect(self) -> str:
@@ -109,15 +173,28 @@ def judged(
     test: verdicts.Test,
     budget: str,
     unit: str,
+    amount: float | None = None,
 ) -> Row:
     """A row whose verdict the rule computes from ``test``; an inconclusive one names the
-    sample size (in ``unit``) at which the paper's effect becomes detectable."""
+    sample size (in ``unit``) at which the paper's effect becomes detectable. ``amount``:
+    the budget in the paper's unit for the row's figure (``PAPER_BUDGETS``)."""
     verdict = verdicts.verdict(test, paper_effect)
     decide = ""
     if verdict == verdicts.INCONCLUSIVE:
         decide = f"{verdicts.units_to_decide(test, paper_effect)} {unit}"
     return Row(
-        key, figure, claim, setting, paper, paper_effect, basis, test, budget, verdict, decide
+        key,
+        figure,
+        claim,
+        setting,
+        paper,
+        paper_effect,
+        basis,
+        test,
+        budget,
+        verdict,
+        decide,
+        amount,
     )
 
 
@@ -145,6 +222,9 @@ def _accuracies(
     }
 
 
+CPU_EPOCHS, CPU_ROUNDS = 5, 100  # the cpu sweep of Figure 2 (sgb.experiments.fig2)
+
+
 def figure2_rows(results: dict, dataset: str) -> list[Row]:
     """Figure 2's four statements on ``dataset`` (accuracies in percentage points)."""
     sgb = _accuracies(results["records"], "sgb")
@@ -152,7 +232,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
     low = [min(sgb), min(dgb)]
     ratios_s, ratios_d = sorted(sgb), sorted(dgb)
     seeds = len(sgb[ratios_s[0]])
-    budget = f"{seeds} seeds; the cpu sweep (SGB 5 epochs, DGB 100 rounds)"
+    budget = f"{seeds} seeds; the cpu sweep (SGB {CPU_EPOCHS} epochs, DGB {CPU_ROUNDS} rounds)"
     setting = f"{dataset}, our DGB layout"
     basis = "the paper shows no number: 1 point, the smallest difference taken to matter"
     rows = [
@@ -167,6 +247,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
             verdicts.welch(100 * dgb[ratios_d[0]], 100 * sgb[ratios_s[0]]),
             budget,
             "seeds",
+            CPU_EPOCHS,
         )
     ]
     for i in (-2, -1):
@@ -182,6 +263,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
                 verdicts.welch(100 * sgb[ratios_s[i]], 100 * dgb[ratios_d[i]]),
                 budget,
                 "seeds",
+                CPU_EPOCHS,
             )
         )
     # slow decline: each model's loss from the lowest ratio to the second-highest
@@ -199,6 +281,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
             verdicts.welch(decline_d, decline_s),
             budget,
             "seeds",
+            CPU_EPOCHS,
         )
     )
     return rows
@@ -257,7 +340,8 @@ def sgb_variant_tests(
     return _welch_table(of[variant], of[baseline], pairs, (variant, baseline))
 
 
-FULL_BUDGET = "SGB 50 epochs, 3 draws a minibatch; DGB 500 rounds, best validation"
+FULL_EPOCHS = 50
+FULL_BUDGET = f"SGB {FULL_EPOCHS} epochs, 3 draws a minibatch; DGB 500 rounds, best validation"
 
 
 def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str) -> list[Row]:
@@ -292,6 +376,7 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
                     test,
                     f"{test.n} seeds; {FULL_BUDGET}",
                     "seeds",
+                    FULL_EPOCHS,
                 )
             )
     return rows
@@ -347,6 +432,7 @@ def crossover_row(
         sides[0].budget if sides else "-",
         verdict,
         decide,
+        sides[0].amount if sides else None,
     )
 
 
@@ -434,6 +520,7 @@ def figure3_rows(
                 verdicts.welch(vanilla / scale, top / scale),
                 budget,
                 "seeds",
+                steps,
             )
         )
         rows.append(
@@ -448,6 +535,7 @@ def figure3_rows(
                 verdicts.welch(top / scale, bottom / scale),
                 budget,
                 "seeds",
+                steps,
             )
         )
     return rows
@@ -1006,16 +1094,21 @@ def sigma_law_rows(toy: dict) -> list[Row]:
 
 
 # results files whose rows are a function of their results alone, in scorecard order
-_READ_WHOLE = (
-    ("rl/fig5_ant_cpu.json", figure5_rows),
-    ("rl/populations_ant_cpu.json", populations_rows),
-    ("rl/regime_populations_ant_cpu.json", regime_population_rows),
-    ("theory_cpu.json", theorem_rows),
-    ("evolution_digits_cpu.json", evolution_rows),
-    ("rl/bet_hedging_ant_cpu.json", bet_hedging_rows),
-    ("rl/innate_start_ant_cpu.json", innate_start_rows),
-    ("innate_start_supervised_fashion-mnist_cpu.json", innate_supervised_rows),
+_READ_WHOLE = (  # file, its rows, and the sweep whose genomes it evaluates (if any)
+    ("rl/fig5_ant_cpu.json", figure5_rows, "fig3"),
+    ("rl/populations_ant_cpu.json", populations_rows, "fig3"),
+    ("rl/regime_populations_ant_cpu.json", regime_population_rows, "regime"),
+    ("theory_cpu.json", theorem_rows, None),
+    ("evolution_digits_cpu.json", evolution_rows, None),
+    ("rl/bet_hedging_ant_cpu.json", bet_hedging_rows, None),
+    ("rl/innate_start_ant_cpu.json", innate_start_rows, None),
+    ("innate_start_supervised_fashion-mnist_cpu.json", innate_supervised_rows, None),
 )
+
+
+def _genomes_at(rows: list[Row], steps: float | None) -> list[Row]:
+    """``rows`` of Figures 4 and 5, their budget the ``steps`` their genomes trained."""
+    return [replace(r, amount=steps) if r.family in ("Figure 4", "Figure 5") else r for r in rows]
 
 
 def scorecard(results_dir: Path) -> list[Row]:
@@ -1036,10 +1129,13 @@ def scorecard(results_dir: Path) -> list[Row]:
         full = figure2_full_rows(sgb_results, dgb_results, rounds, "Fashion-MNIST")
         cross = figure2_full_crossover(full, sgb_results, dgb_results, rounds, "Fashion-MNIST")
         rows += full + ([cross] if cross else [])
+    genome_steps: dict[str, float] = {}  # sweep -> the steps its genomes trained
     for env in ("ant", "halfcheetah"):
         payload = load(f"rl/fig3_{env}_cpu.json")
         if payload is not None:
             steps = payload["provenance"]["config"]["ppo"]["total_steps"]
+            if env == "ant":
+                genome_steps["fig3"] = steps
             if _trained(payload["results"]):
                 rows += figure3_rows(payload["results"], env, steps)
                 if env == "ant":
@@ -1048,14 +1144,15 @@ def scorecard(results_dir: Path) -> list[Row]:
                 rows.append(untrained_row(env, steps))
     regime = load("rl/regime_ant_cpu.json")
     if regime is not None:
-        rows += regime_rows(regime["results"], regime["provenance"]["config"]["ppo"]["total_steps"])
+        genome_steps["regime"] = regime["provenance"]["config"]["ppo"]["total_steps"]
+        rows += regime_rows(regime["results"], genome_steps["regime"])
     fig4 = load("rl/fig4_ant_cpu.json")
     if fig4 is not None:
-        rows += figure4_rows(fig4["results"]["returns"])
-    for name, rows_of in _READ_WHOLE:
+        rows += _genomes_at(figure4_rows(fig4["results"]["returns"]), genome_steps.get("fig3"))
+    for name, rows_of, sweep in _READ_WHOLE:
         payload = load(name)
         if payload is not None:
-            rows += rows_of(payload["results"])
+            rows += _genomes_at(rows_of(payload["results"]), genome_steps.get(sweep))
     rows += [
         untestable(
             "fig4f.r_terrain",
@@ -1091,6 +1188,7 @@ def untrained_row(env: str, steps: int) -> Row:
         f"{steps:,} steps: vanilla PPO learned nothing",
         verdicts.INCONCLUSIVE,
         "a sweep in which vanilla PPO learns: 2M steps on spring (the cpu profile)",
+        steps,
     )
 
 
@@ -1121,7 +1219,8 @@ def table(rows: list[Row]) -> pd.DataFrame:
             "test": _test_name(r.test),
             "detectable at 80 % power": "-" if r.test is None else _num(r.test.detectable),
             "effect compared": r.compared,
-            "budget": r.budget,
+            "budget": r.budget_text,
+            "the paper's budget": r.paper_budget.text,
             "verdict": r.verdict,
             "what would decide": r.decide or "-",
         }

@@ -12,7 +12,6 @@ precision of their interval (``interval_text``).
 
 import html as html_escape
 import math
-import re
 from collections import Counter
 from dataclasses import dataclass
 
@@ -156,18 +155,12 @@ def badge(verdict: str) -> str:
     )
 
 
-def family(r: Row) -> str:
-    """The family of row ``r`` for Holm's correction: its figure without the panel letter
-    ("Figure 3C" and "Figure 3D" are "Figure 3"), its theorem, or its chapter."""
-    found = re.match(r"Figure \d+", r.figure)
-    return found.group(0) if found else r.figure
-
-
 def holm_p(rows: list[Row]) -> list[float]:
-    """Each row's p after Holm's correction within its ``family`` (``nan`` for no p)."""
+    """Each row's p after Holm's correction within its family (``Row.family``; ``nan`` for
+    no p)."""
     adjusted = [math.nan] * len(rows)
-    for name in dict.fromkeys(family(r) for r in rows):
-        mine = [i for i, r in enumerate(rows) if family(r) == name]
+    for name in dict.fromkeys(r.family for r in rows):
+        mine = [i for i, r in enumerate(rows) if r.family == name]
         ps = [math.nan if rows[i].test is None else rows[i].test.p for i in mine]
         for i, q in zip(mine, verdicts.holm(ps), strict=True):
             adjusted[i] = q
@@ -205,9 +198,17 @@ def _e(text: str) -> str:
     return html_escape.escape(str(text))
 
 
+def _below(r: Row) -> str:
+    """Under a headline's badge: how far below the paper's budget its verdict stands."""
+    if not r.below_budget:
+        return ""
+    return f'<br><small style="color:#555">{_e(r.below_budget)}</small>'
+
+
 def _detail_table(line: ClaimLine) -> str:
     """Every row of a claim: setting, effect, ours, paper, the effect compared (the paper's
-    or its stand-in, with why), test, power, budget, verdict and what would decide."""
+    or its stand-in, with why), test, p, power, budget beside the paper's, verdict and what
+    would decide."""
     head = (
         "setting",
         "effect tested",
@@ -218,6 +219,7 @@ def _detail_table(line: ClaimLine) -> str:
         "p (Holm)",
         "detectable at 80 % power",
         "budget",
+        "the paper's budget",
         "verdict",
         "what would decide",
     )
@@ -238,7 +240,8 @@ def _detail_table(line: ClaimLine) -> str:
             _e(test),
             _e("-" if r.test is None else f"{p_text(r.test.p)} ({p_text(corrected)})"),
             _e(detectable),
-            _e(r.budget),
+            _e(r.budget_text),
+            _e(r.paper_budget.text),
             badge(r.verdict),
             _e(r.decide or "-"),
         )
@@ -269,7 +272,7 @@ def html(rows: list[Row]) -> str:
             f'{_e(r.claim)}<br><small style="color:#555">{_e(r.setting)}</small>',
             f"{_e(ours_text(r))}{unit}",
             _e(paper_text(r)),
-            badge(r.verdict),
+            badge(r.verdict) + _below(r),
         )
         body.append(
             '<tr class="sgb-claim">' + "".join(f"<td>{c}</td>" for c in cells) + "</tr>"

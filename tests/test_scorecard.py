@@ -128,3 +128,22 @@ def test_holm_corrects_within_each_figure_and_the_page_names_the_survivors():
     reproduced = [q for r, q in pairs if r.verdict == verdicts.REPRODUCED]
     survive = sum(q < 0.05 for q in reproduced)
     assert f"**{survive} of the {len(reproduced)}**" in scorecard.holm_text(rows)
+
+
+def test_a_verdict_below_the_papers_budget_says_how_far_below():
+    """Figure 3 at 2M steps is at 4 % of the paper's 5 x 10^7 steps, and its line on the
+    page says so under the badge; the authors' own 49,152,000 steps count as the paper's
+    budget; a theorem has no budget of the paper's to fall short of."""
+    rows = claims.scorecard(committed_results())
+    fig3 = next(r for r in rows if r.key == "fig3.fall_16.ant")
+    assert fig3.amount == 2_000_000 and fig3.share == pytest.approx(0.04)
+    assert fig3.below_budget == "at 4 % of the paper's budget (steps)"
+    assert fig3.budget_text.endswith("(at 4 % of the paper's budget (steps))")
+    regime = dataclasses.replace(fig3, amount=49_152_000)
+    assert regime.below_budget == "" and regime.budget_text == regime.budget
+    theorem = next(r for r in rows if r.family.startswith("Theorem"))
+    assert theorem.paper_budget == claims.NO_PAPER_BUDGET and theorem.share is None
+    page = scorecard.html([fig3])
+    below = scorecard.html_escape.escape(fig3.below_budget)
+    assert f'<br><small style="color:#555">{below}</small>' in page
+    assert scorecard.html_escape.escape(fig3.paper_budget.text) in page
