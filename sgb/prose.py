@@ -67,9 +67,24 @@ def _seeds(n: int) -> str:
 def regime(payload: Payload) -> dict[str, str]:
     """The authors' regime (``rl/regime_ant_cpu.json``), from its summary per arm (mean
     final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
-    on the authors' scale, its mean env-steps/s and wall time per run (``regime_*``), and
-    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds."""
+    on the authors' scale, its mean env-steps/s and wall time per run (``regime_*``),
+    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds, and the
+    scorecard's rows of the level at 128 types and the fall to 16 with the authors' genome
+    (``regime_level``, ``regime_fall``: estimate, interval and verdict; "no row yet" while
+    an arm they compare has one seed)."""
     runs, summary = payload["results"]["runs"], payload["results"]["summary"]
+    steps = payload["provenance"]["config"]["ppo"]["total_steps"]
+    card = claims.by_key(claims.regime_rows(payload["results"], steps))
+    genome = claims.REGIME_SETTINGS["authors"]
+    texts = {}
+    for name, key in (("level", "fig3.level_128.regime.ant"), ("fall", "fig3.fall_16.regime.ant")):
+        row = next((r for r in card.get(key, []) if r.setting.endswith(genome)), None)
+        found = row_texts("row", row)
+        texts[f"regime_{name}"] = (
+            "no row yet (an arm it compares has one seed)"
+            if row is None
+            else f"{found['row_ours']}, {found['row_verdict']}"
+        )
     vanilla = next(s for s in summary if s["cell_types"] is None)
     mine = [r for r in runs if r["cell_types"] is None]
     n = len(vanilla["seeds"])
@@ -88,7 +103,7 @@ def regime(payload: Payload) -> dict[str, str]:
             for s in arms
         )
         or "none",
-    }
+    } | texts
 
 
 def populations(payload: Payload | None) -> dict[str, str]:

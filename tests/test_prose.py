@@ -164,3 +164,26 @@ def test_the_variants_texts_say_a_known_shift_and_a_null_one():
     assert texts["full_rho_shift"].startswith("+0.0 to +0.0 points over 7 ratios (0 of whose")
     assert texts["full_rho_mean_shift"].startswith("+0.0 to +0.0 points over 7 ratios")
     assert texts["full_rho_conclusion"].endswith("at none of the 7 ratios")
+
+
+def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
+    """With seed 0 alone no row; with two seeds of vanilla and 128 types the level's text
+    is its row's estimate and verdict, and the fall still has none."""
+    regime = results.load("rl/regime_ant_cpu.json")
+    runs = regime["results"]["runs"]
+    seed0 = {
+        **regime,
+        "results": {**regime["results"], "runs": [r for r in runs if r["seed"] == 0]},
+    }
+    assert prose.regime(seed0)["regime_level"].startswith("no row yet")
+    second = [
+        {**r, "seed": 1, "final_return": r["final_return"] + 150.0}
+        for r in runs
+        if r["seed"] == 0 and r["cell_types"] in (None, 128)
+    ]
+    both = {**regime, "results": {**regime["results"], "runs": seed0["results"]["runs"] + second}}
+    steps = regime["provenance"]["config"]["ppo"]["total_steps"]
+    (level,) = claims.regime_rows(both["results"], steps)
+    texts = prose.regime(both)
+    assert texts["regime_level"] == f"{level.ours}, **{level.verdict}**"
+    assert texts["regime_fall"].startswith("no row yet")

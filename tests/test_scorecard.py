@@ -96,6 +96,9 @@ def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_
     assert fall.verdict == verdicts.REPRODUCED and fall.test.low > 0.7
     assert "50M steps" in fall.budget
     assert claims.regime_rows({"runs": [r for r in runs if r["seed"] == 0]}, 50_000_000) == []
+    no_second_16 = [r for r in runs if r["seed"] == 0 or r["cell_types"] != 16]
+    (level,) = claims.regime_rows({"runs": no_second_16}, 50_000_000)
+    assert level.key == "fig3.level_128.regime.ant" and "16 types 1" in level.budget
     two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
     (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
     assert line.headline is fall
