@@ -131,6 +131,19 @@ BENCH = {
     "throughput": {b: {"train_steps_per_s": 1e4} for b in ("generalized", "mjx")},
     "reach": {"backend": "mjx", "eval_steps": [0, 1e6], "eval_returns": [0.0, 1e3]},
 }
+SUMMARY = {"median_ratio": 0.95, "log_correlation": 0.91}
+LAYER = {k: np.abs(RNG.normal(size=12)) for k in ("sigma2", "curvature", "curvature_population")}
+FIXED = [
+    {
+        "cell_types": types,
+        "runs": [
+            {"epochs": e, "kl_weight": 1e-3, "prior_sigma": 1.0, "sigma2_init": 0.01}
+            | {"layers": {"dense": LAYER}, "summary": {"at_mean": SUMMARY, "population": SUMMARY}}
+            for e in (3, 30, 300)
+        ],
+    }
+    for types in ((None, 8, 10), (4, 4, 10))
+]
 RETURNS = {"normal": {k: RNG.normal(size=(20, 3)) for k in ("individuals", "mean_network")}}
 FRAMES = {name: np.zeros((40, 60, 3)) for name in ("normal", "long legs", "slippery")}
 
@@ -143,6 +156,7 @@ FIGURES = {
         f"theory.{name}": lambda name=name: getattr(theory, name)(THEORY)
         for name in ("figure6", "sign_scan", "sign_map", "breakdown", "network_gap", "elbo_toy")
     },
+    "theory.fixed_point": lambda: theory.fixed_point(FIXED),
     "rl.plot_spread": lambda: rl.plot_spread(SPREAD),
     "rl.plot_backends": lambda: rl.plot_backends(BENCH),
     "rl.plot_mean_network": lambda: rl.plot_mean_network(RETURNS),

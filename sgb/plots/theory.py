@@ -274,7 +274,7 @@ def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
                     color=color,
                     rasterized=True,  # thousands of points: as vectors, megabytes of SVG
                     label=(
-                        f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f}, "
+                        f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f},\n"
                         f"log corr. {summary['log_correlation']:.2f}"
                     ),
                 )
