@@ -19,12 +19,12 @@ def _cells(records: Sequence[Mapping[str, Any]], k: int, stochastic: bool) -> li
 
 
 def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = None) -> list:
-    """Two panels. Top: fitness (training accuracy of the candidates' individuals, %) per
-    generation, mean over seeds, for each number of hidden types and genome. Bottom: test
+    """Two panels. Left: fitness (training accuracy of the candidates' individuals, %) per
+    generation, mean over seeds, for each number of hidden types and genome. Right: test
     accuracy (%) of the evolved genome's individuals (their mean) and of the deterministic
     genome's network, mean over seeds with SEM error bars and each seed as a dot. Returns
-    the axes (one above the other)."""
-    curves, bars = axes_or_new(axes, 2, 1, figsize=(WIDTH, 6.4))
+    the axes."""
+    curves, bars = axes_or_new(axes, 1, 2, figsize=(WIDTH, 4.4))
     records = results["records"]
     ks = sorted({r["hidden_types"] for r in records})
     for j, k in enumerate(ks):
@@ -51,7 +51,7 @@ def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = Non
             bars.plot(np.full(len(accuracy), x), accuracy, "k.", ms=4)
     curves.set_xlabel("generation")
     curves.set_ylabel("fitness: innate training accuracy (%)")
-    curves.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
+    curves.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18))
     compression = {r["hidden_types"]: r["compression"] for r in records}
     bars.set_xticks(range(len(ks)), [f"{k} types\n({compression[k]:.0f}x)" for k in ks])
     bars.set_ylabel("innate test accuracy (%)")
@@ -65,9 +65,8 @@ def plot_hedging(
     """Two panels, bars per initial spread: the geometric-mean fitness of the individuals
     and of the clones (the mean network at home = 1), and the chance that at least ``k``
     members survive (a return of ``q`` of the mean network's at home); means over the
-    spread's genomes with SEM error bars, each genome a dot. Returns the axes (one above
-    the other)."""
-    fitness, survival = axes_or_new(axes, 2, 1, figsize=(WIDTH, 6.0), sharex=True)
+    spread's genomes with SEM error bars, each genome a dot. Returns the axes."""
+    fitness, survival = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.6))
     genomes = results["genomes"]
     spreads = list(dict.fromkeys(g["rho_init"] for g in genomes))
     width = 0.8 / len(_POPULATIONS)

@@ -13,7 +13,7 @@ from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
 _LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
 _AXES = {
     "ours": "compression ratio, every parameter counted",
-    "authors": "compression ratio, authors' count (weights / tables or g-nets)",
+    "authors": "compression ratio, authors' count\n(weights / tables or g-nets)",
 }
 _KL = {"synapse": "KL per synapse (Bayes by backprop)", "table": "KL per type pair (genome)"}
 
@@ -83,9 +83,8 @@ def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]], axes=None) -> n
 
 
 def figure2_conventions(results: Mapping[str, Any], axes=None) -> np.ndarray:
-    """Figure 2 for one dataset under both counting conventions, one above the other (2
-    axes)."""
-    axes = axes_or_new(axes, 2, 1, figsize=(WIDTH, 6.4), sharey=True)
+    """Figure 2 for one dataset under both counting conventions, side by side (2 axes)."""
+    axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.8), sharey=True)
     for ax, convention in zip(axes, ("ours", "authors"), strict=True):
         plot_accuracy_vs_compression(results, convention, ax=ax)
     axes[0].legend(fontsize=8, loc="lower left")

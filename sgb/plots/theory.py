@@ -249,14 +249,14 @@ def _fixed_point_points(run: dict[str, Any], field: str) -> tuple[np.ndarray, np
 
 def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
     """Each digits classifier's learned sigma^2 per type pair against c / (H + c lambda):
-    one row per classifier (``axes``: (classifiers, 2)); left, H at the trained means;
-    right, H averaged over sampled individuals. One colour per training length; the dashed
-    line is equality, the dotted one sigma^2 at initialisation."""
+    top, H at the trained means; bottom, H averaged over sampled individuals; one column
+    per classifier (``axes``: (2, classifiers)). One colour per training length; the
+    dashed line is equality, the dotted one sigma^2 at initialisation."""
     n = len(fixed_points)
-    axes = axes_or_new(axes, n, 2, figsize=(WIDTH, 3.6 * n), squeeze=False)
+    axes = axes_or_new(axes, 2, n, figsize=(WIDTH, 7.2), squeeze=False)
     colors = (PALETTE["baseline"], PALETTE["sgb"], PALETTE["dgb"], PALETTE["individuals"])
-    for row, net in enumerate(fixed_points):
-        for col, (field, where) in enumerate(
+    for col, net in enumerate(fixed_points):
+        for row, (field, where) in enumerate(
             (
                 ("curvature", "H at the trained means"),
                 ("curvature_population", "H over individuals"),
@@ -265,7 +265,7 @@ def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
             ax = axes[row, col]
             for run, color in zip(net["runs"], colors, strict=False):
                 sigma2, predicted = _fixed_point_points(run, field)
-                summary = run["summary"]["at_mean" if col == 0 else "population"]
+                summary = run["summary"]["at_mean" if row == 0 else "population"]
                 ax.scatter(
                     predicted,
                     sigma2,
