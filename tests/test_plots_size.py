@@ -15,6 +15,7 @@ from sgb.plots import (
     MIN_FONT_PT,
     WIDTH,
     apply_style,
+    beyond,
     rl,
     shown_min_font_pt,
     shown_width_in,
@@ -145,6 +146,15 @@ FIXED = [
     for types in ((None, 8, 10), (4, 4, 10))
 ]
 RETURNS = {"normal": {k: RNG.normal(size=(20, 3)) for k in ("individuals", "mean_network")}}
+CONDITIONS = ("normal", "long_legs", "slippery", "low_gravity")
+GENOME = {
+    "returns": {
+        p: {c: RNG.normal(1e3, 200, size=(30, 4)) for c in CONDITIONS}
+        for p in ("individuals", "clones")
+    },
+    "rho_init": -3.0,
+    "training_seed": 0,
+}
 FRAMES = {name: np.zeros((40, 60, 3)) for name in ("normal", "long legs", "slippery")}
 
 # each figure function on synthetic data of its shape, drawn in its test
@@ -157,6 +167,7 @@ FIGURES = {
         for name in ("figure6", "sign_scan", "sign_map", "breakdown", "network_gap", "elbo_toy")
     },
     "theory.fixed_point": lambda: theory.fixed_point(FIXED),
+    "beyond.plot_condition_returns": lambda: beyond.plot_condition_returns(GENOME),
     "rl.plot_spread": lambda: rl.plot_spread(SPREAD),
     "rl.plot_backends": lambda: rl.plot_backends(BENCH),
     "rl.plot_mean_network": lambda: rl.plot_mean_network(RETURNS),

@@ -5,6 +5,8 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+import pandas as pd
+import seaborn as sns
 from matplotlib.axes import Axes
 
 from sgb.plots import PALETTE, WIDTH, axes_or_new
@@ -99,20 +101,21 @@ def _bar(ax: Axes, x: float, values: list, width: float, color: str, label: str 
 
 def plot_condition_returns(genome: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """One genome: per condition, each member's mean return over its episodes, individuals
-    beside clones of the mean network (box plots). Returns ``ax``."""
-    ax = axes_or_new(ax, figsize=(6.4, 3.6))
-    conditions = list(genome["returns"]["individuals"])
-    for i, (population, color) in enumerate(_POPULATIONS):
-        data = [np.mean(genome["returns"][population][c], axis=1) for c in conditions]
-        positions = np.arange(len(conditions)) + (i - 0.5) * 0.36
-        box = ax.boxplot(
-            data, positions=positions, widths=0.32, patch_artist=True, showfliers=False
-        )
-        for patch in box["boxes"]:
-            patch.set(facecolor=color, alpha=0.6)
-        ax.plot([], [], "s", color=color, alpha=0.6, label=population)
-    ax.set_xticks(range(len(conditions)), [c.replace("_", " ") for c in conditions])
-    ax.set_ylabel("mean return of a member")
+    beside clones of the mean network (box plots, each member a dot). Returns ``ax``."""
+    ax = axes_or_new(ax, figsize=(WIDTH, 3.6))
+    rows = [
+        {"condition": condition.replace("_", " "), "population": population, "return": value}
+        for population, _ in _POPULATIONS
+        for condition, returns in genome["returns"][population].items()
+        for value in np.mean(returns, axis=1)
+    ]
+    frame = pd.DataFrame(rows)
+    style = {"x": "condition", "y": "return", "hue": "population", "ax": ax}
+    sns.boxplot(
+        frame, **style, palette=dict(_POPULATIONS), showfliers=False, boxprops={"alpha": 0.6}
+    )
+    sns.stripplot(frame, **style, dodge=True, palette=["k"] * 2, size=2, alpha=0.4, legend=False)
+    ax.set(xlabel=None, ylabel="mean return of a member")
     ax.set_title(f"$\\rho$ from {genome['rho_init']:g}, seed {genome['training_seed']}")
     ax.legend(fontsize=8)
     return ax

@@ -176,9 +176,10 @@ def plot_backends(bench: dict, axes=None):
     (left) and the learning curve of vanilla PPO on the fastest one (right)."""
     axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.4))
     speeds = bench["throughput"]
-    axes[0].bar(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
-    axes[0].set_xlabel("Brax backend")
-    axes[0].set_ylabel("training env-steps/s")
+    axes[0].barh(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
+    axes[0].invert_yaxis()
+    axes[0].set_ylabel("Brax backend")
+    axes[0].set_xlabel("training env-steps/s")
     axes[0].set_title(f"{bench['env']}: vanilla PPO,\n{bench['throughput_steps']:,} steps")
     reach = bench["reach"]
     axes[1].plot(np.array(reach["eval_steps"]) / 1e6, reach["eval_returns"], marker="o")
