@@ -72,6 +72,15 @@ class Row:
         return next(v for k, v in EFFECTS.items() if self.key.startswith(k))
 
     @property
+    def compared(self) -> str:
+        """The effect the verdict weighs the interval against, with where it comes from:
+        the paper's number, or what stands in for it (``paper_effect_basis``, in words)."""
+        if self.paper_effect is None:
+            return "-"
+        basis = self.paper_effect_basis or "the paper's"
+        return f"{_num(self.paper_effect)} ({basis})"
+
+    @property
     def ours(self) -> str:
         """Our estimate and its 95 % interval, as text."""
         if self.test is None:
@@ -1111,7 +1120,7 @@ def table(rows: list[Row]) -> pd.DataFrame:
             "ours (95 % CI)": r.ours,
             "test": _test_name(r.test),
             "detectable at 80 % power": "-" if r.test is None else _num(r.test.detectable),
-            "paper's effect": "-" if r.paper_effect is None else _num(r.paper_effect),
+            "effect compared": r.compared,
             "budget": r.budget,
             "verdict": r.verdict,
             "what would decide": r.decide or "-",

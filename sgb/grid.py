@@ -32,6 +32,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 import warnings
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -205,6 +206,14 @@ def _hours(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.0f} min"
 
 
+def time_left(per_chunk: float, chunks_left: int, into_chunk: float) -> float:
+    """Seconds a run has left: ``chunks_left`` chunks of ``per_chunk`` s, less the
+    ``into_chunk`` s already spent on the first of them (at most all of it)."""
+    if chunks_left <= 0:
+        return 0.0
+    return per_chunk * (chunks_left - 1) + max(per_chunk - into_chunk, 0.0)
+
+
 def describe(queue: Queue) -> list[str]:
     """A line per run of ``queue``: done (its wall time), running (its process, chunk and
     ETA), or waiting (where it resumes), and a summary line."""
@@ -217,8 +226,10 @@ def describe(queue: Queue) -> list[str]:
             progress = resume.peek(r.state)[1]
             chunk, spent = progress["chunks"], progress["wall_time_s"]
         per_chunk = spent / chunk if chunk else (typical / r.chunks if typical else None)
-        remaining = None if per_chunk is None else per_chunk * (r.chunks - chunk)
         pid = None if r.finished else runlock.holder(r.checkpoint)
+        # a running run is into its current chunk since its state was last written
+        into = time.time() - r.state.stat().st_mtime if pid and r.state.exists() else 0.0
+        remaining = None if per_chunk is None else time_left(per_chunk, r.chunks - chunk, into)
         if r.finished:
             what = f"done ({_hours(r.wall_time_s)})" if r.wall_time_s else "done"
         elif pid is not None:

@@ -10,6 +10,7 @@ file that is not a results file, that is not as its run wrote it (``sgb.provenan
 checksum, ``sgb.manifest``), or that does not parse under its schema (``sgb.schemas``).
 """
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -76,13 +77,24 @@ def fig3_summary(payload: Payload) -> list[dict]:
     return results.get("summary_last_two", results["summary"])
 
 
-FIG3_COLUMNS = ["env", "settings", "cell_types", "score", "mean_return", "sem_return"]
-FIG3_COLUMNS += ["fraction", "sem_fraction", "n_seeds", "steps"]
+FIG3_COLUMNS = {
+    "env": "body",
+    "settings": "settings",
+    "cell_types": "cell types",
+    "score": "score",
+    "mean_return": "mean return",
+    "sem_return": "SEM of return",
+    "fraction": "fraction of vanilla",
+    "sem_fraction": "SEM of fraction",
+    "n_seeds": "seeds",
+    "steps": "env steps per run",
+}
 
 
 def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
-    """Figure 3 sweeps, one row per env, settings, cell types ("vanilla" for PPO) and score
-    ("last" evaluation or mean of the "last_two"), with the sweep's env steps per run."""
+    """Figure 3 sweeps, one row per body, settings, cell types ("vanilla" for PPO) and
+    score ("last" evaluation or mean of the "last_two"), with the sweep's env steps per run;
+    columns named as ``FIG3_COLUMNS`` maps the files' keys."""
     tables = []
     for payload in payloads:
         results = payload["results"]
@@ -96,18 +108,26 @@ def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
                 tables.append(table)
     table = pd.concat(tables, ignore_index=True)
     table["cell_types"] = ["vanilla" if pd.isna(k) else f"{k:.0f}" for k in table["cell_types"]]
-    return table[FIG3_COLUMNS]
+    return table[list(FIG3_COLUMNS)].rename(columns=FIG3_COLUMNS)
 
 
-REGIME_COLUMNS = ["cell_types", "seed", "final_return", "last_two_return", "authors_scale"]
-REGIME_COLUMNS += ["train_steps_per_s", "wall_time_s"]
+REGIME_COLUMNS = {
+    "cell_types": "cell types",
+    "seed": "seed",
+    "final_return": "final return",
+    "last_two_return": "mean of last two returns",
+    "authors_scale": "final, authors' scale",
+    "train_steps_per_s": "env steps/s",
+    "wall_time_s": "wall time (s)",
+}
 
 
 def regime_table(payload: Payload) -> pd.DataFrame:
     """The authors' regime (``sgb.experiments.regime``), one row per run: final and
     last-two evaluation returns, the final one on the authors' Figure 3 scale, training
-    env-steps/s and wall time."""
-    return pd.DataFrame(payload["results"]["runs"])[REGIME_COLUMNS]
+    env-steps/s and wall time; columns named as ``REGIME_COLUMNS`` maps the files' keys."""
+    runs = pd.DataFrame(payload["results"]["runs"])[list(REGIME_COLUMNS)]
+    return runs.rename(columns=REGIME_COLUMNS)
 
 
 def spread_table(payload: Payload) -> pd.DataFrame:
@@ -129,22 +149,29 @@ def spread_table(payload: Payload) -> pd.DataFrame:
     )
 
 
-def fig45_statistics(fig4: Payload, fig5: Payload) -> pd.Series:
-    """Figures 4E/F and 5 in numbers: Pearson r and p between bodies and between niches;
-    our paired t and the authors' one-sample t, with the means of the individuals and of
-    the mean network (the centres of their 99 % intervals)."""
+def fig45_statistics(fig4: Payload, fig5: Payload) -> pd.DataFrame:
+    """Figures 4E/F and 5 in numbers, one row per test: Pearson r between bodies and
+    between niches; our paired t and the authors' one-sample t, with the mean returns of
+    the individuals and of the mean network (the centres of their 99 % intervals)."""
     legs, niches = fig4["results"]["legs"], fig4["results"]["niches"]
     paired, authors = fig5["results"]["mean_network"], fig5["results"]["authors_protocol"]
-    values = {"4E legs r": legs["r"], "4E legs p": legs["p"]}
-    values |= {"4F niches r": niches["r"], "4F niches p": niches["p"]}
-    for name, test, t in (("5 ours", paired, "paired t"), ("5 authors", authors, "one-sample t")):
-        values |= {
-            f"{name}: {t}": test["t"],
-            f"{name}: p": test["p"],
-            f"{name}: individuals mean": test["individuals_ci99"][0],
-            f"{name}: mean network": test["mean_network_ci99"][0],
+    rows = [
+        {"figure": "4E", "test": "Pearson r, normal body vs long legs", **legs},
+        {"figure": "4F", "test": "Pearson r, slippery vs low gravity", **niches},
+        {"figure": "5", "test": "paired t (our protocol)", **paired},
+        {"figure": "5", "test": "one-sample t (the authors' protocol)", **authors},
+    ]
+    return pd.DataFrame(
+        {
+            "figure": row["figure"],
+            "test": row["test"],
+            "statistic": row["r"] if "r" in row else row["t"],
+            "p": row["p"],
+            "individuals' mean return": row.get("individuals_ci99", [math.nan])[0],
+            "mean network's return": row.get("mean_network_ci99", [math.nan])[0],
         }
-    return pd.Series(values, name="value")
+        for row in rows
+    )
 
 
 def figure2_table(results: dict) -> pd.DataFrame:
@@ -184,7 +211,7 @@ def dgb_budget_table(results: dict) -> pd.DataFrame:
             "generated test %": 100 * r["generated_test_accuracy"],
         }
         for r in results["records"]
-    ).set_index("rounds")
+    )
 
 
 def evolution_table(payload: Payload) -> pd.DataFrame:
@@ -232,10 +259,68 @@ def hedging_table(payload: Payload, q: str = "0.5") -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def _mean_sem(mean: float, sem: float, scale: float = 1.0, decimals: int = 0) -> str:
+    """``mean ± sem`` as text (``sem`` omitted where NaN: one seed)."""
+    if math.isnan(sem):
+        return f"{scale * mean:.{decimals}f}"
+    return f"{scale * mean:.{decimals}f} ± {scale * sem:.{decimals}f}"
+
+
+def mean_gap_table(results: dict) -> pd.DataFrame:
+    """The mean network's gap (``sgb.experiments.mean_gap``), one row per cell (hidden
+    types, rho start): compression both ways, seeds, and means ± SEM over seeds of the test
+    accuracy (%) of the individuals, their mean network and the moment-matched network, the
+    gap individuals minus mean network (points), the trained sigma and the moment-matched
+    network's recovery of that gap (a ratio)."""
+    return pd.DataFrame(
+        {
+            "hidden types": s["setting"],
+            "rho start": s["rho_init"],
+            "compression (ours)": s["compression"],
+            "compression (authors')": s["compression_authors"],
+            "seeds": s["n"],
+            "individuals %": _mean_sem(s["accuracy"], s["accuracy_sem"], 100.0, 1),
+            "mean network %": _mean_sem(s["mean_network"], s["mean_network_sem"], 100.0, 1),
+            "moment-matched %": _mean_sem(s["moment_network"], s["moment_network_sem"], 100.0, 1),
+            "gap (points)": _mean_sem(s["gap"], s["gap_sem"], 100.0, 1),
+            "trained sigma": _mean_sem(s["sigma_end"], s["sigma_end_sem"], 1.0, 4),
+            "recovery": _mean_sem(s["moment_recovery"], s["moment_recovery_sem"], 1.0, 2),
+        }
+        for s in results["summary"]
+    )
+
+
+def innate_start_table(payload: Payload) -> pd.DataFrame:
+    """Learning from an innate start, one row per genome and start, means ± SEM over seeds:
+    for the Ant (``sgb.experiments.innate_start``) the return per episode at 0, 1/4, 1/2 and
+    all of the fine-tuning, the mean return over it (area under the curve over its steps) and
+    that less the fresh network's; for Fashion-MNIST
+    (``sgb.experiments.innate_start_supervised``) the test accuracy (%) at each recorded
+    step."""
+    rows = []
+    for s in payload["results"]["summary"]:
+        row = {"start": s["start"]}
+        if "genome" in s:
+            row["genome"] = s["genome"] or "none (fresh network)"
+        row["seeds"] = s["n_seeds"]
+        if "steps" in s:
+            for step, mean, sem in zip(s["steps"], s["accuracy"], s["accuracy_sem"], strict=True):
+                row[f"step {step} (% accuracy)"] = _mean_sem(mean, sem, 100.0, 1)
+        else:
+            for at in ("0", "0.25", "0.5", "1"):
+                row[f"return at {at}"] = _mean_sem(s[f"return_at_{at}"], s[f"return_at_{at}_sem"])
+            row["mean return over fine-tuning"] = _mean_sem(s["auc"], s["auc_sem"])
+            row["less the fresh network's"] = _mean_sem(
+                s["auc_minus_fresh"], s["auc_minus_fresh_sem"]
+            )
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def dgb_full_table(payload: Payload) -> pd.DataFrame:
     """Figure 2's DGB at the authors' budget (``sgb.experiments.dgb_full``), one row per
     cell: target ratio, seed, g-net width, compression under both conventions beside the
-    paper's nominal ratio for that width, rounds trained and the test accuracy of the
+    paper's nominal ratio for that width, rounds trained and the test accuracy (%) of the
     network of best validation accuracy so far."""
     return pd.DataFrame(
         {
@@ -246,7 +331,9 @@ def dgb_full_table(payload: Payload) -> pd.DataFrame:
             "compression (authors')": c["compression_authors"],
             "nominal ratio (paper's axis)": c["nominal_ratio"],
             "rounds": c["records"][-1]["rounds"] if c["records"] else 0,
-            "test accuracy": c["records"][-1]["test_accuracy"] if c["records"] else float("nan"),
+            "test accuracy %": 100 * c["records"][-1]["test_accuracy"]
+            if c["records"]
+            else float("nan"),
         }
         for c in payload["results"]["cells"].values()
     ).sort_values(["target ratio", "seed"], ignore_index=True)
@@ -255,8 +342,8 @@ def dgb_full_table(payload: Payload) -> pd.DataFrame:
 def sgb_full_table(payload: Payload) -> pd.DataFrame:
     """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``),
     one row per variant and number of hidden types, over the seeds finished: compression
-    under both conventions, the seeds, the test accuracy of the individuals (mean over
-    seeds of each seed's mean, and its SD over seeds) and of the mean network, and the
+    under both conventions, the seeds, the test accuracy (%) of the individuals (mean over
+    seeds of each seed's mean, and its SD over seeds, in points) and of the mean network, the
     trained sigma of each layer (its synapses' mean, mean over seeds)."""
     cells = pd.DataFrame(
         {
@@ -265,8 +352,8 @@ def sgb_full_table(payload: Payload) -> pd.DataFrame:
             "compression (ours)": r["compression"],
             "compression (authors')": r["compression_authors"],
             "seed": r["seed"],
-            "individuals": r["accuracy"],
-            "mean network": r["mean_network"],
+            "individuals %": 100 * r["accuracy"],
+            "mean network %": 100 * r["mean_network"],
             **{f"sigma, layer {i}": layer["mean_sigma"] for i, layer in enumerate(r["layers"])},
         }
         for r in payload["results"]["cells"].values()
@@ -276,13 +363,14 @@ def sgb_full_table(payload: Payload) -> pd.DataFrame:
         "compression (ours)": ("compression (ours)", "mean"),
         "compression (authors')": ("compression (authors')", "mean"),
         "seeds": ("seed", "count"),
-        "individuals": ("individuals", "mean"),
-        "individuals (SD)": ("individuals", "std"),
-        "mean network": ("mean network", "mean"),
+        "individuals %": ("individuals %", "mean"),
+        "SD of individuals (points)": ("individuals %", "std"),
+        "mean network %": ("mean network %", "mean"),
         **{c: (c, "mean") for c in sigmas},
     }
     return (
         cells.groupby(["variant", "hidden types"])
         .agg(**how)
         .sort_values(["variant", "compression (ours)"])
+        .reset_index()
     )

@@ -12,6 +12,7 @@ precision of their interval (``interval_text``).
 
 import html as html_escape
 import math
+import re
 from collections import Counter
 from dataclasses import dataclass
 
@@ -58,10 +59,12 @@ SHORT = {verdicts.INCONCLUSIVE: "inconclusive", verdicts.NOT_TESTABLE: "not test
 
 @dataclass(frozen=True)
 class ClaimLine:
-    """One claim of the paper: its headline row and every row that tests it."""
+    """One claim of the paper: its headline row, every row that tests it, and each row's p
+    after Holm's correction within its family (``holm_p``)."""
 
     headline: Row
     rows: tuple[Row, ...]
+    holm: tuple[float, ...]
 
 
 def counts(rows: list[Row]) -> dict[str, int]:
@@ -89,13 +92,14 @@ def _claim_of(key: str) -> int:
 def claim_lines(rows: list[Row]) -> list[ClaimLine]:
     """The claims that have rows, in ``CLAIMS`` order, each with its headline: the first
     row of its first key (the largest budget) that has rows. Every row belongs to one."""
-    grouped: dict[int, list[Row]] = {}
-    for r in rows:
-        grouped.setdefault(_claim_of(r.key), []).append(r)
+    grouped: dict[int, list[tuple[Row, float]]] = {}
+    for r, corrected in zip(rows, holm_p(rows), strict=True):
+        grouped.setdefault(_claim_of(r.key), []).append((r, corrected))
     lines = []
-    for i, mine in sorted(grouped.items()):
+    for i, pairs in sorted(grouped.items()):
+        mine = [r for r, _ in pairs]
         headline = next(r for p in CLAIMS[i] for r in mine if r.key.startswith(p))
-        lines.append(ClaimLine(headline, tuple(mine)))
+        lines.append(ClaimLine(headline, tuple(mine), tuple(q for _, q in pairs)))
     return lines
 
 
@@ -152,6 +156,45 @@ def badge(verdict: str) -> str:
     )
 
 
+def family(r: Row) -> str:
+    """The family of row ``r`` for Holm's correction: its figure without the panel letter
+    ("Figure 3C" and "Figure 3D" are "Figure 3"), its theorem, or its chapter."""
+    found = re.match(r"Figure \d+", r.figure)
+    return found.group(0) if found else r.figure
+
+
+def holm_p(rows: list[Row]) -> list[float]:
+    """Each row's p after Holm's correction within its ``family`` (``nan`` for no p)."""
+    adjusted = [math.nan] * len(rows)
+    for name in dict.fromkeys(family(r) for r in rows):
+        mine = [i for i, r in enumerate(rows) if family(r) == name]
+        ps = [math.nan if rows[i].test is None else rows[i].test.p for i in mine]
+        for i, q in zip(mine, verdicts.holm(ps), strict=True):
+            adjusted[i] = q
+    return adjusted
+
+
+def p_text(p: float) -> str:
+    """A p-value as the page shows it: "< 0.001", or to two significant figures."""
+    if math.isnan(p):
+        return "-"
+    return "< 0.001" if p < 0.001 else f"{p:.2g}"
+
+
+def holm_text(rows: list[Row]) -> str:
+    """Which reproduced rows keep p < 0.05 after Holm's correction within their family
+    (markdown)."""
+    pairs = [(r, q) for r, q in zip(rows, holm_p(rows), strict=True)]
+    kept = [(r, q) for r, q in pairs if r.verdict == verdicts.REPRODUCED]
+    survive = [r for r, q in kept if q < 1 - verdicts.LEVEL]
+    names = "; ".join(f"{r.figure}, {r.setting}" for r in survive) or "none"
+    return (
+        f"Corrected for the many tests of each figure (Holm, within the figure, theorem or "
+        f"chapter), **{len(survive)} of the {len(kept)}** reproduced rows keep p < 0.05: "
+        f"{names}. Each row's raw and corrected p are in its details."
+    )
+
+
 def summary_text(rows: list[Row]) -> str:
     """The counts by verdict, in words (markdown)."""
     parts = [f"**{n}** {SHORT.get(v, v)}" for v, n in counts(rows).items()]
@@ -163,21 +206,23 @@ def _e(text: str) -> str:
 
 
 def _detail_table(line: ClaimLine) -> str:
-    """Every row of a claim: setting, effect, ours, paper, test, power, budget, verdict and
-    what would decide."""
+    """Every row of a claim: setting, effect, ours, paper, the effect compared (the paper's
+    or its stand-in, with why), test, power, budget, verdict and what would decide."""
     head = (
         "setting",
         "effect tested",
         "ours (95 % CI)",
         "paper",
+        "effect compared",
         "test",
+        "p (Holm)",
         "detectable at 80 % power",
         "budget",
         "verdict",
         "what would decide",
     )
     body = []
-    for r in line.rows:
+    for r, corrected in zip(line.rows, line.holm, strict=True):
         detectable = "-"
         if r.test is not None:
             detectable = number_text(r.test.detectable, _decimals(r.test.high - r.test.low))
@@ -189,7 +234,9 @@ def _detail_table(line: ClaimLine) -> str:
             _e(r.effect),
             _e(ours_text(r)),
             _e(paper_text(r)),
+            _e(r.compared),
             _e(test),
+            _e("-" if r.test is None else f"{p_text(r.test.p)} ({p_text(corrected)})"),
             _e(detectable),
             _e(r.budget),
             badge(r.verdict),

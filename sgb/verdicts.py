@@ -232,3 +232,17 @@ def power_at(test: Test, effect: float) -> float:
     se = (test.high - test.low) / (2 * crit)
     shift = abs(effect) / se
     return float(dist.sf(crit - shift) + dist.cdf(-crit - shift))
+
+
+def holm(p: list[float]) -> list[float]:
+    """Holm's step-down adjusted p-values of one family of tests, in the order given: the
+    i-th smallest p times (m - i + 1), made non-decreasing, at most 1. A ``nan`` p (a test
+    with none) stays ``nan`` and is not counted in the family's m. Rejecting where the
+    adjusted p < alpha keeps the chance of any false rejection in the family <= alpha."""
+    values = [validation.real("p", x) if not math.isnan(x) else x for x in p]
+    order = sorted((x, i) for i, x in enumerate(values) if not math.isnan(x))
+    m, adjusted, running = len(order), [math.nan] * len(values), 0.0
+    for rank, (x, i) in enumerate(order):
+        running = max(running, min(1.0, (m - rank) * x))
+        adjusted[i] = running
+    return adjusted

@@ -69,6 +69,15 @@ def test_the_holder_of_a_run_is_read_without_taking_its_lock(tmp_path):
         assert mine
 
 
+def test_a_running_runs_time_left_counts_the_time_into_its_chunk():
+    """Three chunks of 600 s left, 200 s into the first: 1000 s + 600 s; past the first
+    chunk's typical time, the rest only; none left, none."""
+    assert grid.time_left(600.0, 3, 200.0) == 1600.0
+    assert grid.time_left(600.0, 3, 0.0) == 1800.0
+    assert grid.time_left(600.0, 3, 900.0) == 1200.0
+    assert grid.time_left(600.0, 0, 50.0) == 0.0
+
+
 def _curve(results: Path, name: str) -> tuple[list[float], list[np.ndarray]]:
     """The learning curve and parameters of checkpoint ``name`` under ``results``."""
     _, params, _, meta = checkpoints.load(results / "rl" / "checkpoints" / name)

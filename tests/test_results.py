@@ -102,11 +102,11 @@ def test_fig3_table_holds_every_summary_row_of_both_sweeps_unchanged():
     ]
     assert len(table) == len(expected)
     for (_, got), (env, score, row) in zip(table.iterrows(), expected, strict=True):
-        assert got["env"] == env and got["score"] == (score[8:] or "last")
+        assert got["body"] == env and got["score"] == (score[8:] or "last")
         k = row["cell_types"]
-        assert got["cell_types"] == ("vanilla" if k is None else str(k))
-        assert got["mean_return"] == row["mean_return"] and got["n_seeds"] == row["n_seeds"]
-    assert set(table["steps"]) == {
+        assert got["cell types"] == ("vanilla" if k is None else str(k))
+        assert got["mean return"] == row["mean_return"] and got["seeds"] == row["n_seeds"]
+    assert set(table["env steps per run"]) == {
         p["provenance"]["config"]["ppo"]["total_steps"] for p in payloads
     }
 
@@ -121,8 +121,8 @@ def test_fig3_summary_prefers_the_last_two_score():
 def test_regime_and_spread_tables_are_the_runs_of_their_files():
     regime = raw("rl/regime_ant_cpu.json")
     table = results.regime_table(regime)
-    assert list(table.columns) == results.REGIME_COLUMNS
-    assert table["final_return"].tolist() == [r["final_return"] for r in regime["results"]["runs"]]
+    assert list(table.columns) == list(results.REGIME_COLUMNS.values())
+    assert table["final return"].tolist() == [r["final_return"] for r in regime["results"]["runs"]]
     spread = raw("rl/spread_ant_cpu.json")
     table = results.spread_table(spread)
     runs = spread["results"]["runs"]
@@ -130,15 +130,49 @@ def test_regime_and_spread_tables_are_the_runs_of_their_files():
     assert table["paired t(99)"].tolist() == [r["paired_test"]["t"] for r in runs]
 
 
+def test_innate_start_tables_name_every_start_with_no_list_cells():
+    """One row per summary row; the fresh network named; the supervised curve's accuracy
+    in % at each step, the Ant's returns as mean ± SEM text."""
+    ant = raw("rl/innate_start_ant_cpu.json")
+    table = results.innate_start_table(ant)
+    summary = ant["results"]["summary"]
+    assert len(table) == len(summary)
+    assert "none (fresh network)" in set(table["genome"])
+    first = summary[1]
+    assert table.loc[1, "return at 1"] == (
+        f"{first['return_at_1']:.0f} ± {first['return_at_1_sem']:.0f}"
+    )
+    sup = raw("innate_start_supervised_fashion-mnist_cpu.json")
+    table = results.innate_start_table(sup)
+    row = sup["results"]["summary"][0]
+    last = row["steps"][-1]
+    shown = table.loc[0, f"step {last} (% accuracy)"]
+    assert shown.startswith(f"{100 * row['accuracy'][-1]:.1f} ± ")
+    assert not any(isinstance(v, list) for v in table.to_numpy().ravel())
+
+
+def test_mean_gap_table_shows_each_cell_in_percent():
+    gap = raw("mean_gap_fashion-mnist_cpu.json")["results"]
+    table = results.mean_gap_table(gap)
+    assert len(table) == len(gap["summary"])
+    first = gap["summary"][0]
+    assert table.loc[0, "gap (points)"] == (
+        f"{100 * first['gap']:.1f} ± {100 * first['gap_sem']:.1f}"
+    )
+    assert table.loc[0, "hidden types"] == first["setting"]
+
+
 def test_fig45_statistics_are_the_files_tests():
     fig4, fig5 = raw("rl/fig4_ant_cpu.json"), raw("rl/fig5_ant_cpu.json")
-    values = results.fig45_statistics(fig4, fig5)
-    assert values["4E legs r"] == fig4["results"]["legs"]["r"]
-    assert values["4F niches p"] == fig4["results"]["niches"]["p"]
+    table = results.fig45_statistics(fig4, fig5).set_index("test")
+    legs = table.loc["Pearson r, normal body vs long legs"]
+    assert legs["statistic"] == fig4["results"]["legs"]["r"]
+    assert table.loc["Pearson r, slippery vs low gravity", "p"] == fig4["results"]["niches"]["p"]
     protocol = fig5["results"]["authors_protocol"]
-    assert values["5 authors: one-sample t"] == protocol["t"]
-    assert values["5 authors: mean network"] == protocol["mean_network_ci99"][0]
-    assert values["5 ours: paired t"] == fig5["results"]["mean_network"]["t"]
+    authors = table.loc["one-sample t (the authors' protocol)"]
+    assert authors["statistic"] == protocol["t"]
+    assert authors["mean network's return"] == protocol["mean_network_ci99"][0]
+    assert math.isnan(legs["mean network's return"])
 
 
 def test_figure2_table_gives_each_setting_both_compressions_and_its_accuracy():
@@ -159,7 +193,7 @@ def test_figure2_table_gives_each_setting_both_compressions_and_its_accuracy():
 def test_dgb_budget_table_has_one_row_per_record():
     budget = raw("dgb_budget_fashion-mnist_cpu.json")["results"]
     table = results.dgb_budget_table(budget)
-    assert table.index.tolist() == [r["rounds"] for r in budget["records"]]
+    assert table["rounds"].tolist() == [r["rounds"] for r in budget["records"]]
     assert table["its test %"].tolist() == pytest.approx(
         [100 * r["test_accuracy"] for r in budget["records"]]
     )
@@ -177,7 +211,7 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
     assert len(records) == len(finished) > 0
     for r in records:
         row = finished.loc[(r["setting"], r["seed"])]
-        assert r["accuracy"] == row["test accuracy"]
+        assert 100 * r["accuracy"] == pytest.approx(row["test accuracy %"])
         assert r["compression"] == row["compression (ours)"]
         assert r["nominal_ratio"] == row["nominal ratio (paper's axis)"]
 
@@ -187,10 +221,12 @@ def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():
     table = results.sgb_full_table(payload)
     cells = list(payload["results"]["cells"].values())
     assert table["seeds"].sum() == len(cells)
-    for (variant, hidden), row in table.iterrows():
+    for _, row in table.iterrows():
+        variant, hidden = row["variant"], row["hidden types"]
         mine = [c for c in cells if c["variant"] == variant and c["setting"] == hidden]
         assert row["seeds"] == len(mine)
-        assert row["individuals"] == pytest.approx(sum(c["accuracy"] for c in mine) / len(mine))
+        mean = 100 * sum(c["accuracy"] for c in mine) / len(mine)
+        assert row["individuals %"] == pytest.approx(mean)
         assert row["sigma, layer 0"] == pytest.approx(
             sum(c["layers"][0]["mean_sigma"] for c in mine) / len(mine)
         )

@@ -2,6 +2,7 @@
 a claim's headline is its largest budget's first row, the counts add up, and numbers are
 printed to the precision their interval carries."""
 
+import dataclasses
 import re
 
 import numpy as np
@@ -98,3 +99,32 @@ def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_
     two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
     (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
     assert line.headline is fall
+
+
+def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
+    """A row whose effect stands in for a direction says so in words beside the number; a
+    row with the paper's own number says it is the paper's; the page shows both."""
+    rows = claims.scorecard(committed_results())
+    stand_in = next(r for r in rows if r.paper_effect_basis and r.paper_effect is not None)
+    assert stand_in.compared.endswith(f"({stand_in.paper_effect_basis})")
+    own = dataclasses.replace(stand_in, paper_effect=0.25, paper_effect_basis="")
+    assert own.compared == "0.25 (the paper's)"
+    page = scorecard.html(rows)
+    assert "effect compared" in page
+    assert scorecard.html_escape.escape(stand_in.compared) in page
+
+
+def test_holm_corrects_within_each_figure_and_the_page_names_the_survivors():
+    """Figure 3C and 3D are one family; each row's corrected p is Holm's over its family's
+    p alone; the page counts the reproduced rows whose corrected p stays under 0.05."""
+    rows = claims.scorecard(committed_results())
+    adjusted = scorecard.holm_p(rows)
+    figure3 = [i for i, r in enumerate(rows) if r.figure.startswith("Figure 3")]
+    assert {rows[i].figure for i in figure3} >= {"Figure 3C", "Figure 3D"}
+    expected = verdicts.holm([rows[i].test.p for i in figure3])
+    np.testing.assert_allclose([adjusted[i] for i in figure3], expected)
+    pairs = list(zip(rows, adjusted, strict=True))
+    assert all(q >= r.test.p for r, q in pairs if r.test and not np.isnan(q))
+    reproduced = [q for r, q in pairs if r.verdict == verdicts.REPRODUCED]
+    survive = sum(q < 0.05 for q in reproduced)
+    assert f"**{survive} of the {len(reproduced)}**" in scorecard.holm_text(rows)
