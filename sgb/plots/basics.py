@@ -5,7 +5,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from scipy import stats as scipy_stats
 
-from sgb.plots import PALETTE, axes_or_new
+from sgb.plots import PALETTE, WIDTH, axes_or_new
 from sgb.stats import sem
 
 
@@ -74,7 +74,7 @@ def accuracy_comparison(rows: Sequence[Mapping], ax=None):
         ("population_average", "population-averaged prediction"),
     ]
     colors = [PALETTE["mean_network"], PALETTE["individuals"], PALETTE["sgb"]]
-    ax = axes_or_new(ax, figsize=(7.5, 4))
+    ax = axes_or_new(ax, figsize=(WIDTH, 4))
     offset = 0.2
     for j, ((key, label), color) in enumerate(zip(kinds, colors, strict=True)):
         means, errors = [], []

@@ -5,9 +5,11 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
+import pandas as pd
+import seaborn as sns
 from matplotlib.axes import Axes
 
-from sgb.plots import PALETTE, axes_or_new
+from sgb.plots import PALETTE, WIDTH, axes_or_new
 from sgb.stats import sem
 
 _GENOMES = ((True, "stochastic genome", PALETTE["sgb"]), (False, "deterministic", "#555555"))
@@ -24,7 +26,7 @@ def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = Non
     accuracy (%) of the evolved genome's individuals (their mean) and of the deterministic
     genome's network, mean over seeds with SEM error bars and each seed as a dot. Returns
     the axes."""
-    curves, bars = axes_or_new(axes, 1, 2, figsize=(10.5, 3.8))
+    curves, bars = axes_or_new(axes, 1, 2, figsize=(WIDTH, 4.4))
     records = results["records"]
     ks = sorted({r["hidden_types"] for r in records})
     for j, k in enumerate(ks):
@@ -51,7 +53,7 @@ def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = Non
             bars.plot(np.full(len(accuracy), x), accuracy, "k.", ms=4)
     curves.set_xlabel("generation")
     curves.set_ylabel("fitness: innate training accuracy (%)")
-    curves.legend(fontsize=8)
+    curves.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18))
     compression = {r["hidden_types"]: r["compression"] for r in records}
     bars.set_xticks(range(len(ks)), [f"{k} types\n({compression[k]:.0f}x)" for k in ks])
     bars.set_ylabel("innate test accuracy (%)")
@@ -66,7 +68,7 @@ def plot_hedging(
     and of the clones (the mean network at home = 1), and the chance that at least ``k``
     members survive (a return of ``q`` of the mean network's at home); means over the
     spread's genomes with SEM error bars, each genome a dot. Returns the axes."""
-    fitness, survival = axes_or_new(axes, 1, 2, figsize=(10.5, 3.8))
+    fitness, survival = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.6))
     genomes = results["genomes"]
     spreads = list(dict.fromkeys(g["rho_init"] for g in genomes))
     width = 0.8 / len(_POPULATIONS)
@@ -99,20 +101,21 @@ def _bar(ax: Axes, x: float, values: list, width: float, color: str, label: str 
 
 def plot_condition_returns(genome: Mapping[str, Any], ax: Axes | None = None) -> Axes:
     """One genome: per condition, each member's mean return over its episodes, individuals
-    beside clones of the mean network (box plots). Returns ``ax``."""
-    ax = axes_or_new(ax, figsize=(6.4, 3.6))
-    conditions = list(genome["returns"]["individuals"])
-    for i, (population, color) in enumerate(_POPULATIONS):
-        data = [np.mean(genome["returns"][population][c], axis=1) for c in conditions]
-        positions = np.arange(len(conditions)) + (i - 0.5) * 0.36
-        box = ax.boxplot(
-            data, positions=positions, widths=0.32, patch_artist=True, showfliers=False
-        )
-        for patch in box["boxes"]:
-            patch.set(facecolor=color, alpha=0.6)
-        ax.plot([], [], "s", color=color, alpha=0.6, label=population)
-    ax.set_xticks(range(len(conditions)), [c.replace("_", " ") for c in conditions])
-    ax.set_ylabel("mean return of a member")
+    beside clones of the mean network (box plots, each member a dot). Returns ``ax``."""
+    ax = axes_or_new(ax, figsize=(WIDTH, 3.6))
+    rows = [
+        {"condition": condition.replace("_", " "), "population": population, "return": value}
+        for population, _ in _POPULATIONS
+        for condition, returns in genome["returns"][population].items()
+        for value in np.mean(returns, axis=1)
+    ]
+    frame = pd.DataFrame(rows)
+    style = {"x": "condition", "y": "return", "hue": "population", "ax": ax}
+    sns.boxplot(
+        frame, **style, palette=dict(_POPULATIONS), showfliers=False, boxprops={"alpha": 0.6}
+    )
+    sns.stripplot(frame, **style, dodge=True, palette=["k"] * 2, size=2, alpha=0.4, legend=False)
+    ax.set(xlabel=None, ylabel="mean return of a member")
     ax.set_title(f"$\\rho$ from {genome['rho_init']:g}, seed {genome['training_seed']}")
     ax.legend(fontsize=8)
     return ax

@@ -5,7 +5,7 @@ rendered frames of the bodies (still, or walking with each tile labelled)."""
 import numpy as np
 
 from sgb import stats
-from sgb.plots import PALETTE, axes_or_new
+from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
 from sgb.rl.regimes import FIG3_SCALE
 
 SETTINGS_STYLE = {
@@ -154,7 +154,7 @@ def plot_spread(summary: list[dict], axes=None):
     """Against the initial sigma (log axis): the individuals' mean return minus the mean
     network's (left) and the standard deviation of the individuals' returns (right);
     bars are the SEM over seeds."""
-    axes = axes_or_new(axes, 1, 2, figsize=(10, 3.8))
+    axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.2))
     sigma = [r["sigma_init"] for r in summary]
     panels = (
         ("advantage", "individuals - mean network (return)", PALETTE["individuals"]),
@@ -174,12 +174,13 @@ def plot_spread(summary: list[dict], axes=None):
 def plot_backends(bench: dict, axes=None):
     """``benchmarks/bench_backends.py``'s results: training env-steps/s per Brax backend
     (left) and the learning curve of vanilla PPO on the fastest one (right)."""
-    axes = axes_or_new(axes, 1, 2, figsize=(10, 3.8))
+    axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.4))
     speeds = bench["throughput"]
-    axes[0].bar(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
-    axes[0].set_xlabel("Brax backend")
-    axes[0].set_ylabel("training env-steps/s")
-    axes[0].set_title(f"{bench['env']}: vanilla PPO, {bench['throughput_steps']:,} steps")
+    axes[0].barh(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
+    axes[0].invert_yaxis()
+    axes[0].set_ylabel("Brax backend")
+    axes[0].set_xlabel("training env-steps/s")
+    axes[0].set_title(f"{bench['env']}: vanilla PPO,\n{bench['throughput_steps']:,} steps")
     reach = bench["reach"]
     axes[1].plot(np.array(reach["eval_steps"]) / 1e6, reach["eval_returns"], marker="o")
     axes[1].set_xlabel("training env steps (millions)")
@@ -189,9 +190,8 @@ def plot_backends(bench: dict, axes=None):
 
 
 def show_images(images: dict[str, np.ndarray], axes=None):
-    """Rendered frames (height, width, 3) side by side, titled by their keys."""
-    n = len(images)
-    axes = np.ravel(axes_or_new(axes, 1, n, figsize=(4.0 * n, 3.2), squeeze=False))
+    """Rendered frames (height, width, 3), two a row, titled by their keys."""
+    axes = panels(axes, len(images), 2.8)
     for ax, (title, image) in zip(axes, images.items(), strict=True):
         ax.imshow(image)
         ax.set_title(title)

@@ -8,12 +8,12 @@ import numpy as np
 from matplotlib.axes import Axes
 
 from sgb.experiments.fig2 import summarise_compression
-from sgb.plots import PALETTE, axes_or_new
+from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
 
 _LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
 _AXES = {
     "ours": "compression ratio, every parameter counted",
-    "authors": "compression ratio, authors' count (weights / tables or g-nets)",
+    "authors": "compression ratio, authors' count\n(weights / tables or g-nets)",
 }
 _KL = {"synapse": "KL per synapse (Bayes by backprop)", "table": "KL per type pair (genome)"}
 
@@ -72,9 +72,10 @@ def plot_accuracy_vs_compression(
 
 
 def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]], axes=None) -> np.ndarray:
-    """Figure 2, every parameter counted: one panel per dataset (``axes``: as many)."""
+    """Figure 2, every parameter counted: one panel per dataset (``axes``: as many), two
+    a row."""
     n = len(results_by_dataset)
-    axes = np.ravel(axes_or_new(axes, 1, n, figsize=(5.2 * n, 4.0), squeeze=False))
+    axes = panels(axes, n, 3.4)
     for ax, results in zip(axes, results_by_dataset.values(), strict=True):
         plot_accuracy_vs_compression(results, ax=ax)
     axes[0].legend(fontsize=8, loc="lower left")
@@ -83,7 +84,7 @@ def figure2(results_by_dataset: Mapping[str, Mapping[str, Any]], axes=None) -> n
 
 def figure2_conventions(results: Mapping[str, Any], axes=None) -> np.ndarray:
     """Figure 2 for one dataset under both counting conventions, side by side (2 axes)."""
-    axes = axes_or_new(axes, 1, 2, figsize=(10.4, 4.0), sharey=True)
+    axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.8), sharey=True)
     for ax, convention in zip(axes, ("ours", "authors"), strict=True):
         plot_accuracy_vs_compression(results, convention, ax=ax)
     axes[0].legend(fontsize=8, loc="lower left")

@@ -7,7 +7,7 @@ import numpy as np
 from matplotlib.colors import ListedColormap
 
 from sgb import theory
-from sgb.plots import PALETTE, axes_or_new
+from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
 
 TITLES = {"convex": "convex", "concave": "concave", "nonconvex": "non-convex"}
 
@@ -22,17 +22,18 @@ def types_label(cell_types) -> str:
 
 
 def figure6(results: dict[str, Any], axes=None) -> np.ndarray:
-    """The paper's Figure 6: per toy loss, the loss curve with mu's start (x) and end
-    (triangle) and the population's spread (mu +- sigma), and Delta L over training."""
+    """The paper's Figure 6, one row per toy loss (``axes``: (losses, 2)): the loss curve
+    with mu's start (x) and end (triangle) and the population's spread (mu +- sigma), and
+    Delta L over training; the legends once, on the first row."""
     runs = results["trajectories"]
-    axes = axes_or_new(axes, 2, len(runs), figsize=(12, 6.5))
-    for col, (name, run) in enumerate(runs.items()):
+    axes = axes_or_new(axes, len(runs), 2, figsize=(WIDTH, 2.8 * len(runs)), squeeze=False)
+    for row, (name, run) in enumerate(runs.items()):
         mu, sigma = _a(run["mu"]), _a(run["sigma"])
         lo = min(mu.min() - 2 * sigma.max(), -2.0)
         hi = max(mu.max() + 2 * sigma.max(), 2.0)
         w = np.linspace(lo, hi, 400)
         loss = theory.toy_loss(name)
-        top, bottom = axes[0, col], axes[1, col]
+        top, bottom = axes[row, 0], axes[row, 1]
         top.plot(w, loss(jnp.asarray(w)), color="k", lw=1.5, label="$L(w)$")
         for i, color, marker, label in ((0, "k", "x", "start"), (-1, "red", "^", "end")):
             top.axvspan(
@@ -46,7 +47,8 @@ def figure6(results: dict[str, Any], axes=None) -> np.ndarray:
                 mu[i], loss(mu[i]), marker, color=color, ms=10, mew=2, label=f"{label}: $\\mu$"
             )
         top.set(title=f"{TITLES[name]} loss", xlabel="weight $w$", ylabel="loss $L(w)$")
-        top.legend(fontsize=8, loc="best")
+        if row == 0:
+            top.legend(fontsize=8, loc="best")
         steps = np.arange(mu.size)
         gap, se = _a(run["gap"]), _a(run["gap_stderr"])
         bottom.plot(steps, gap, color=PALETTE["sgb"], label=r"measured $\Delta L$")
@@ -63,14 +65,15 @@ def figure6(results: dict[str, Any], axes=None) -> np.ndarray:
             xlabel="gradient step",
             ylabel=r"$\Delta L = \mathbb{E}[L(\mu + \sigma\epsilon)] - L(\mu)$",
         )
-        bottom.legend(fontsize=8)
+        if row == 0:
+            bottom.legend(fontsize=8)
     return axes
 
 
 def sign_scan(results: dict[str, Any], axes=None) -> np.ndarray:
     """Delta L before and after training, against the starting mean mu0, for every toy loss."""
     scan = results["sign_scan"]
-    axes = axes_or_new(axes, 1, len(scan), figsize=(12, 3.6))
+    axes = panels(axes, len(scan), 2.8)
     for ax, (name, row) in zip(axes, scan.items(), strict=True):
         mu0 = _a(row["mu0"])
         for stage, color in (("start", "k"), ("end", "red")):
@@ -98,14 +101,15 @@ def sign_map(results: dict[str, Any], axes=None) -> np.ndarray:
     end_gap, end_se = _a(grid["gap_end"]), _a(grid["gap_stderr_end"])
     end = np.where(np.abs(end_gap) < 3 * end_se, 0.0, np.sign(end_gap))
     cmap = ListedColormap([PALETTE["individuals"], "#dddddd", PALETTE["mean_network"]])
-    axes = axes_or_new(axes, 1, 2, figsize=(11, 4), sharey=True)
+    axes = axes_or_new(axes, 2, 1, figsize=(WIDTH, 5.6), sharex=True)
     extent = (mu0[0], mu0[-1], sigma0[0], sigma0[-1])
     for ax, signs, title in ((axes[0], start, "before training"), (axes[1], end, "after training")):
         image = ax.imshow(
             signs.T, origin="lower", aspect="auto", extent=extent, cmap=cmap, vmin=-1.5, vmax=1.5
         )
-        ax.set(title=f"sign of $\\Delta L$, {title}", xlabel=r"starting mean $\mu_0$")
-    axes[0].set_ylabel(r"starting spread $\sigma_0$")
+        ax.set(title=f"sign of $\\Delta L$, {title}", ylabel=r"starting spread $\sigma_0$")
+        ax.grid(False)
+    axes[1].set_xlabel(r"starting mean $\mu_0$")
     bar = axes[0].figure.colorbar(image, ax=axes, ticks=[-1, 0, 1])
     bar.ax.set_yticklabels(["< 0: individuals better", "~ 0 (within 3 SE)", "> 0: mean better"])
     return axes
@@ -116,7 +120,7 @@ def breakdown(results: dict[str, Any], axes=None) -> np.ndarray:
     against sigma, for several means mu."""
     data = results["breakdown"]
     sigma = _a(data["sigma"])
-    axes = axes_or_new(axes, 1, len(data["rows"]), figsize=(12, 3.6))
+    axes = panels(axes, len(data["rows"]), 2.8)
     for ax, row in zip(axes, data["rows"], strict=True):
         measured, se = _a(row["measured"]), _a(row["stderr"])
         ax.errorbar(
@@ -142,9 +146,10 @@ def breakdown(results: dict[str, Any], axes=None) -> np.ndarray:
 
 def network_gap(results: dict[str, Any], axes=None) -> np.ndarray:
     """Trained digits classifiers: measured Delta L (training cross-entropy; training and test
-    error) against the spread scale, next to the Hessian-trace prediction."""
+    error) against the spread scale, next to the Hessian-trace prediction; one panel above
+    the other, the legends beside them."""
     networks = results["network"]
-    axes = axes_or_new(axes, 1, 2, figsize=(11, 4))
+    axes = axes_or_new(axes, 2, 1, figsize=(WIDTH, 6.4))
     colors = (PALETTE["sgb"], PALETTE["dgb"], PALETTE["baseline"])
     for net, marker, color in zip(networks, "os^", colors, strict=False):
         label = "types " + types_label(net["cell_types"])
@@ -195,7 +200,7 @@ def network_gap(results: dict[str, Any], axes=None) -> np.ndarray:
     for ax in axes:
         ax.set_xticks(scales, [f"{c:g}" for c in scales])
         ax.minorticks_off()
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.02, 0.5))
     return axes
 
 
@@ -207,7 +212,7 @@ def elbo_toy(results: dict[str, Any], ax=None):
     steps = _a(toy["steps"])
     kl_weights = _a(toy["kl_weights"])
     predicted = _a(toy["predicted_sigma"])
-    ax = axes_or_new(ax, figsize=(8, 4.2))
+    ax = axes_or_new(ax, figsize=(WIDTH, 4.2))
     colors = ("k", PALETTE["sgb"], PALETTE["individuals"], PALETTE["dgb"], PALETTE["authors"])
     floor = 1e-3
     for i, (c, color) in enumerate(zip(kl_weights, colors, strict=False)):
@@ -244,11 +249,11 @@ def _fixed_point_points(run: dict[str, Any], field: str) -> tuple[np.ndarray, np
 
 def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
     """Each digits classifier's learned sigma^2 per type pair against c / (H + c lambda):
-    top, H at the trained means; bottom, H averaged over sampled individuals. One colour
-    per training length; the dashed line is equality, the dotted one sigma^2 at
-    initialisation."""
+    top, H at the trained means; bottom, H averaged over sampled individuals; one column
+    per classifier (``axes``: (2, classifiers)). One colour per training length; the
+    dashed line is equality, the dotted one sigma^2 at initialisation."""
     n = len(fixed_points)
-    axes = axes_or_new(axes, 2, n, figsize=(5.5 * n, 8), squeeze=False)
+    axes = axes_or_new(axes, 2, n, figsize=(WIDTH, 7.2), squeeze=False)
     colors = (PALETTE["baseline"], PALETTE["sgb"], PALETTE["dgb"], PALETTE["individuals"])
     for col, net in enumerate(fixed_points):
         for row, (field, where) in enumerate(
@@ -269,7 +274,7 @@ def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
                     color=color,
                     rasterized=True,  # thousands of points: as vectors, megabytes of SVG
                     label=(
-                        f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f}, "
+                        f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f},\n"
                         f"log corr. {summary['log_correlation']:.2f}"
                     ),
                 )

@@ -16,7 +16,7 @@ from matplotlib.collections import LineCollection
 from matplotlib.patches import FancyArrowPatch, Rectangle
 
 from sgb.celltypes import assign_cell_types, expand_table, type_sizes
-from sgb.plots import axes_or_new
+from sgb.plots import WIDTH, axes_or_new, panels
 
 WEIGHTS = mpl.colormaps["RdBu_r"]  # negative blue, positive red
 SPREADS = mpl.colormaps["Purples"]
@@ -76,7 +76,7 @@ def weight_matrix(
         ax.set_xlabel("postsynaptic neuron $b$")
         ax.set_ylabel("presynaptic neuron $a$")
     if title is not None:
-        ax.set_title(title, fontsize=10)
+        ax.set_title(title, fontsize=9.5)
     return ax
 
 
@@ -84,7 +84,7 @@ def expansion(table, shape: Sequence[int], axes: Sequence[Axes] | None = None) -
     """A type table (k_in, k_out), each entry written in its cell (left), and the full
     weight matrix ``expand_table(table, shape)`` it expands to (right), in one colour
     scale, the blocks of each type pair outlined."""
-    axes = axes_or_new(axes, 1, 2, figsize=(8, 3.8), width_ratios=[2, 3])
+    axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.4), width_ratios=[2, 3])
     table = np.asarray(table)
     full = np.asarray(expand_table(table, tuple(shape)))
     limit = _limit(table)
@@ -119,7 +119,7 @@ def individuals(
     names its axes."""
     kernels = np.asarray(kernels)
     n = len(kernels)
-    axes = np.ravel(axes_or_new(axes, 1, n, figsize=(2.75 * n, 3.3), squeeze=False))
+    axes = panels(axes, n, 2.6, columns=4)
     if len(axes) != n:
         raise ValueError(f"{len(kernels)} individuals need as many axes, got {len(axes)}")
     limit = _limit(kernels, limit=limit)
@@ -169,13 +169,13 @@ def _table(ax, values, x0, y0, cell, colors, label):
         ax.add_patch(patch)
         patches.append(patch)
     top = y0 + k_in * cell
-    ax.text(x0 + k_out * cell / 2, top + 0.12, label, ha="center", va="bottom", fontsize=11)
+    ax.text(x0 + k_out * cell / 2, top + 0.12, label, ha="center", va="bottom", fontsize=9)
     for i in range(k_in):  # the presynaptic type of each row
         y = y0 + (k_in - 1 - i + 0.5) * cell
-        ax.plot(x0 - 0.16, y, "o", ms=6, color=_type_color(i, "o"), mec="black")
+        ax.plot(x0 - 0.16, y, "o", ms=5, color=_type_color(i, "o"), mec="black")
     for j in range(k_out):  # the postsynaptic type of each column
         x = x0 + (j + 0.5) * cell
-        ax.plot(x, y0 - 0.16, "s", ms=6, color=_type_color(j, "s"), mec="black")
+        ax.plot(x, y0 - 0.16, "s", ms=5, color=_type_color(j, "s"), mec="black")
     return patches
 
 
@@ -191,7 +191,7 @@ def model_schematic(mu, sigma, kernels, limit: float | None = None, ax: Axes | N
     individual's synapses one ``LineCollection`` of ``ax.collections`` (row-major over
     (a, b)), so what is drawn can be read back.
     """
-    ax = axes_or_new(ax, figsize=(11, 3.6))
+    ax = axes_or_new(ax, figsize=(WIDTH, 2.6))
     mu, sigma, kernels = np.asarray(mu), np.asarray(sigma), np.asarray(kernels)
     if mu.shape != sigma.shape or mu.ndim != 2:
         raise ValueError(f"mu and sigma must be equal 2-D tables, got {mu.shape}, {sigma.shape}")
@@ -214,15 +214,22 @@ def model_schematic(mu, sigma, kernels, limit: float | None = None, ax: Axes | N
         lambda v: SPREADS(0.15 + 0.85 * v / spread_top),
         "spreads $\\sigma_{ij}$",
     )
-    ax.text(0.4 + k_out * cell / 2, 4.05, "genome", ha="center", fontsize=12, weight="bold")
+    ax.text(0.4 + k_out * cell / 2, 4.05, "genome", ha="center", fontsize=10, weight="bold")
 
     start = 0.4 + k_out * cell + 0.35
     ax.add_patch(
-        FancyArrowPatch((start, 2.0), (start + 1.9, 2.0), arrowstyle="-|>", mutation_scale=22, lw=2)
+        FancyArrowPatch(
+            (start, 2.0),
+            (start + 1.9, 2.0),
+            arrowstyle="-|>",
+            mutation_scale=16,
+            lw=1.5,
+            color="black",
+        )
     )
-    ax.text(start + 0.95, 2.2, "development", ha="center", va="bottom", fontsize=11)
+    ax.text(start + 0.95, 2.2, "development", ha="center", va="bottom", fontsize=9)
     rule = "$W_{ab} \\sim \\mathcal{N}(\\mu_{ij},\\,\\sigma_{ij}^2)$"
-    ax.text(start + 0.95, 1.8, rule, ha="center", va="top", fontsize=11)
+    ax.text(start + 0.95, 1.8, rule, ha="center", va="top", fontsize=9)
 
     in_types, out_types = assign_cell_types(n_in, k_in), assign_cell_types(n_out, k_out)
     width, gap = 2.2, 0.45
@@ -246,11 +253,11 @@ def model_schematic(mu, sigma, kernels, limit: float | None = None, ax: Axes | N
         for x, y, kinds, marker in ((x_in, y_in, in_types, "o"), (x_out, y_out, out_types, "s")):
             colors = [_type_color(t, marker) for t in kinds]
             ax.scatter(
-                x, np.full(x.size, y), s=70, c=colors, marker=marker, edgecolors="black", zorder=2
+                x, np.full(x.size, y), s=40, c=colors, marker=marker, edgecolors="black", zorder=2
             )
-        ax.text(x0 + width / 2, 0.1, f"individual {q + 1}", ha="center", va="center", fontsize=10)
+        ax.text(x0 + width / 2, 0.1, f"individual {q + 1}", ha="center", va="center", fontsize=9)
     right = x_first + n_ind * (width + gap) - gap
-    ax.text((x_first + right) / 2, 4.05, "individuals", ha="center", fontsize=12, weight="bold")
+    ax.text((x_first + right) / 2, 4.05, "individuals", ha="center", fontsize=10, weight="bold")
     ax.set_xlim(0, right + 0.2)
     ax.set_ylim(-0.15, 4.3)
     ax.set_aspect("equal")
