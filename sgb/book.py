@@ -129,4 +129,10 @@ def table(frame: pd.DataFrame, caption: str, p_columns: Sequence[str] = ()):
         return lambda x: html.escape(text_of(x))
 
     formats = {c: shown(p_text if c in p_columns else number_text) for c in frame.columns}
-    return frame.style.hide(axis="index").format(formats).set_caption(html.escape(caption))
+    caption_style = {"selector": "caption", "props": "caption-side: top; text-align: left;"}
+    return (
+        frame.style.hide(axis="index")
+        .format(formats)
+        .set_caption(html.escape(caption))
+        .set_table_styles([caption_style])
+    )

@@ -79,35 +79,34 @@ def fig3_summary(payload: Payload) -> list[dict]:
 
 FIG3_COLUMNS = {
     "env": "body",
-    "settings": "settings",
+    "settings": "genome",
     "cell_types": "cell types",
-    "score": "score",
     "mean_return": "mean return",
     "sem_return": "SEM of return",
     "fraction": "fraction of vanilla",
     "sem_fraction": "SEM of fraction",
     "n_seeds": "seeds",
-    "steps": "env steps per run",
+}
+FIG3_GENOMES = {
+    "ours": "ours",
+    "authors": "the authors'",
+    "ours_typed_inputs": "ours, inputs typed",
+    "authors_untyped_inputs": "the authors', inputs untyped",
 }
 
 
 def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
-    """Figure 3 sweeps, one row per body, settings, cell types ("vanilla" for PPO) and
-    score ("last" evaluation or mean of the "last_two"), with the sweep's env steps per run;
-    columns named as ``FIG3_COLUMNS`` maps the files' keys."""
+    """Figure 3 sweeps, one row per body, genome settings (``FIG3_GENOMES``) and cell types
+    ("vanilla" for PPO), each run scored as the verdicts score it (``fig3_summary``: the
+    mean of its last two evaluations where the file has it); columns named as
+    ``FIG3_COLUMNS`` maps the files' keys."""
     tables = []
     for payload in payloads:
-        results = payload["results"]
-        for score in ("summary", "summary_last_two"):
-            if score in results:
-                table = pd.DataFrame(results[score]).assign(
-                    env=results["env"],
-                    score=score[8:] or "last",
-                    steps=payload["provenance"]["config"]["ppo"]["total_steps"],
-                )
-                tables.append(table)
+        table = pd.DataFrame(fig3_summary(payload)).assign(env=payload["results"]["env"])
+        tables.append(table)
     table = pd.concat(tables, ignore_index=True)
     table["cell_types"] = ["vanilla" if pd.isna(k) else f"{k:.0f}" for k in table["cell_types"]]
+    table["settings"] = [FIG3_GENOMES.get(s, s) for s in table["settings"]]
     return table[list(FIG3_COLUMNS)].rename(columns=FIG3_COLUMNS)
 
 

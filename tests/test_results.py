@@ -91,24 +91,16 @@ def test_provenance_line_gives_the_wall_time_in_a_readable_unit(seconds, shown):
     assert line == f"profile cpu, seeds [0], commit 0123456789, 2026-12-01, {shown} on cpu"
 
 
-def test_fig3_table_holds_every_summary_row_of_both_sweeps_unchanged():
+def test_fig3_table_holds_every_scored_row_of_both_sweeps_unchanged():
     payloads = [raw(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
     table = results.fig3_table(payloads)
-    expected = [
-        (p["results"]["env"], score, row)
-        for p in payloads
-        for score in ("summary", "summary_last_two")
-        for row in p["results"].get(score, [])
-    ]
+    expected = [(p["results"]["env"], row) for p in payloads for row in results.fig3_summary(p)]
     assert len(table) == len(expected)
-    for (_, got), (env, score, row) in zip(table.iterrows(), expected, strict=True):
-        assert got["body"] == env and got["score"] == (score[8:] or "last")
+    for (_, got), (env, row) in zip(table.iterrows(), expected, strict=True):
+        assert got["body"] == env and got["genome"] == results.FIG3_GENOMES[row["settings"]]
         k = row["cell_types"]
         assert got["cell types"] == ("vanilla" if k is None else str(k))
         assert got["mean return"] == row["mean_return"] and got["seeds"] == row["n_seeds"]
-    assert set(table["env steps per run"]) == {
-        p["provenance"]["config"]["ppo"]["total_steps"] for p in payloads
-    }
 
 
 def test_fig3_summary_prefers_the_last_two_score():
