@@ -17,7 +17,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from sgb.experiments.rl import sweep_config
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance
+from sgb.recording import write_results
 from sgb.rl.ppo import PPOConfig, train
 
 BACKENDS = ("spring", "positional", "generalized", "mjx")

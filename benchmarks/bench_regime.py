@@ -197,7 +197,8 @@ def main() -> None:
     start = time.perf_counter()
     rows = [measure(k, args.rounds, args.iterations) for k in (None, 64)]
     print(table(rows))
-    from sgb.provenance import provenance, write_results
+    from sgb.provenance import provenance
+    from sgb.recording import write_results
 
     record = provenance(vars(args), "cpu", [0], time.perf_counter() - start)
     write_results(args.out, {"rows": rows, "table": table(rows).splitlines()}, record)

@@ -31,9 +31,9 @@ from typing import Any
 import numpy as np
 
 from sgb import hedging, validation
-from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.experiments.rl import checkpoint_name, checkpoint_root
 from sgb.experiments.rl_spread import mean_sigma
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl.envs import VARIANTS

@@ -66,8 +66,8 @@ from pathlib import Path
 import numpy as np
 
 from sgb import validation
-from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.experiments.rl import CHECKPOINT_DIR, checkpoint_name, checkpoint_root, sweep_config
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl.agent import NetworkConfig, Params

@@ -58,8 +58,9 @@ import numpy as np
 from scipy import stats as scipy_stats
 
 from sgb import validation, verdicts
-from sgb.experiments import PROFILE_NAMES, check_profile, regime
+from sgb.experiments import regime
 from sgb.experiments.rl import checkpoint_name, checkpoint_root
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split

@@ -31,7 +31,6 @@ from pathlib import Path
 import numpy as np
 
 from sgb import runlock, validation
-from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.experiments.rl import (
     CHECKPOINT_DIR,
     finished_run,
@@ -39,8 +38,9 @@ from sgb.experiments.rl import (
     seed_sem,
     trained_run,
 )
-from sgb.grid import Queue, QueuedRun
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import results_file
+from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_regime, authors_scale, with_settings

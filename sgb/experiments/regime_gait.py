@@ -23,10 +23,10 @@ import jax
 import numpy as np
 
 from sgb import validation
-from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.experiments.regime import PROFILES as REGIME_PROFILES
 from sgb.experiments.regime import RegimeRun, checkpoint_name, run_config
 from sgb.experiments.rl import CHECKPOINT_DIR, checkpoint_root, finished_run
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl import checkpoints

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from sgb import runlock, stats, validation
-from sgb.experiments import PROFILE_NAMES, check_profile
 from sgb.paths import committed_results
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import provenance, read_results
 from sgb.recording import Recording, start
 from sgb.rl import checkpoints

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from sgb import genome
-from sgb.experiments import check_profile
 from sgb.experiments.rl import (
     CHECKPOINT_DIR,
     checkpoint_name,
@@ -23,6 +22,7 @@ from sgb.experiments.rl import (
     sweep_config,
     trained_run,
 )
+from sgb.profiles import check_profile
 from sgb.recording import start
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig

@@ -1,0 +1,158 @@
+"""The package's import structure, read from its source with ``ast``.
+
+Every ``import`` and ``from ... import`` of every module of ``sgb`` counts, at module
+level and inside functions alike (a function-level import is still an edge of the
+graph, only a later one). The graph holds the sgb-internal imports: ``from sgb.a import
+b`` is an import of ``sgb.a.b`` where that is a module, else of ``sgb.a``.
+
+The rules:
+
+- no cycle among the modules;
+- the top layer, ``TOP``, is the command line (``sgb.__main__``) and the background queue
+  that runs it (``sgb.grid``): no other module outside ``sgb.experiments`` imports
+  ``sgb.experiments`` or a module under it;
+- no experiment (``sgb.experiments.X``) imports another (``sgb.experiments.Y``) or the
+  registry (the package ``sgb.experiments``): what experiments share lies below them.
+"""
+
+import ast
+from pathlib import Path
+
+import pytest
+
+PACKAGE = Path(__file__).resolve().parent.parent / "sgb"
+EXPERIMENTS = "sgb.experiments"
+TOP = frozenset({"sgb.__main__", "sgb.grid"})
+
+
+def module_name(path: Path) -> str:
+    """The dotted name of the module at ``path`` under the package."""
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def modules() -> dict[str, Path]:
+    """Every module of the package: dotted name -> its file."""
+    return {module_name(p): p for p in sorted(PACKAGE.rglob("*.py"))}
+
+
+def imports_of(name: str, path: Path, known: set[str]) -> set[str]:
+    """The sgb modules that the module ``name`` (at ``path``) imports, anywhere in it."""
+    found = set()
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # relative: resolved against this module's package
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*anchor, base] if base else anchor)
+            for alias in node.names:
+                sub = f"{base}.{alias.name}"
+                found.add(sub if sub in known else base)
+    return {m for m in found if m in known and m != name}
+
+
+def graph() -> dict[str, set[str]]:
+    """The package's import graph: module -> the sgb modules it imports."""
+    files = modules()
+    known = set(files)
+    return {name: imports_of(name, path, known) for name, path in files.items()}
+
+
+def cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    """One cycle of ``edges`` (its modules, the first repeated at the end), or None."""
+    state: dict[str, int] = {}  # 1 on the path, 2 done
+    path: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        path.append(node)
+        for nxt in sorted(edges[node]):
+            if state.get(nxt) == 1:
+                return [*path[path.index(nxt) :], nxt]
+            if nxt not in state and (found := visit(nxt)):
+                return found
+        path.pop()
+        state[node] = 2
+        return None
+
+    for node in sorted(edges):
+        if node not in state and (found := visit(node)):
+            return found
+    return None
+
+
+def is_experiment(name: str) -> bool:
+    return name == EXPERIMENTS or name.startswith(EXPERIMENTS + ".")
+
+
+def upward(edges: dict[str, set[str]]) -> list[str]:
+    """Imports of the experiments from below them: ``importer -> imported``."""
+    return [
+        f"{a} -> {b}"
+        for a, targets in sorted(edges.items())
+        if not is_experiment(a) and a not in TOP
+        for b in sorted(targets)
+        if is_experiment(b)
+    ]
+
+
+def sideways(edges: dict[str, set[str]]) -> list[str]:
+    """Imports among the experiments, or of their registry by one of them."""
+    return [
+        f"{a} -> {b}"
+        for a, targets in sorted(edges.items())
+        if a.startswith(EXPERIMENTS + ".")
+        for b in sorted(targets)
+        if is_experiment(b)
+    ]
+
+
+def test_the_graph_is_read():
+    edges = graph()
+    assert "sgb.experiments.fig2" in edges and "sgb.rl.ppo" in edges
+    assert "sgb.rl.ppo" in edges["sgb.rl.trainer"] or "sgb.rl.trainer" in edges["sgb.rl.ppo"]
+
+
+@pytest.mark.parametrize(
+    ("source", "expected"),
+    [
+        ("from sgb.rl import ppo", {"sgb.rl.ppo"}),
+        ("from sgb.rl.ppo import train", {"sgb.rl.ppo"}),
+        ("def f():\n    import sgb.rl.ppo", {"sgb.rl.ppo"}),
+        ("from . import ppo", {"sgb.rl.ppo"}),
+        ("import numpy", set()),
+    ],
+)
+def test_imports_are_read_at_every_level(tmp_path, source, expected):
+    path = tmp_path / "x.py"
+    path.write_text(source)
+    assert imports_of("sgb.rl.x", path, {"sgb.rl", "sgb.rl.ppo", "sgb.rl.x"}) == expected
+
+
+def test_the_rules_catch_what_they_forbid():
+    edges = {
+        "sgb.a": {"sgb.b"},
+        "sgb.b": {"sgb.a", "sgb.experiments.x"},
+        "sgb.experiments.x": {"sgb.experiments.y", "sgb.experiments"},
+        "sgb.experiments.y": set(),
+        "sgb.experiments": set(),
+    }
+    assert cycle(edges) == ["sgb.a", "sgb.b", "sgb.a"]
+    assert upward(edges) == ["sgb.b -> sgb.experiments.x"]
+    assert sideways(edges) == [
+        "sgb.experiments.x -> sgb.experiments",
+        "sgb.experiments.x -> sgb.experiments.y",
+    ]
+
+
+def test_no_cycle():
+    assert cycle(graph()) is None
+
+
+def test_no_upward_import_of_the_experiments():
+    assert upward(graph()) == []
