@@ -33,7 +33,7 @@ ONE_THREAD = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 PPO_WORKER = """
 import json, sys
 from dataclasses import replace
-from sgb.experiments.rl import sweep_config
+from sgb.rl.sweep import sweep_config
 from sgb.rl.ppo import train
 config = replace(sweep_config("ant", "cpu").ppo, total_steps={steps}, num_evals=3)
 result = train(config, seed=0, progress=False)

@@ -156,3 +156,7 @@ def test_no_cycle():
 
 def test_no_upward_import_of_the_experiments():
     assert upward(graph()) == []
+
+
+def test_no_experiment_imports_another():
+    assert sideways(graph()) == []
