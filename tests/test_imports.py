@@ -12,15 +12,20 @@ The rules:
   that runs it (``sgb.grid``): no other module outside ``sgb.experiments`` imports
   ``sgb.experiments`` or a module under it;
 - no experiment (``sgb.experiments.X``) imports another (``sgb.experiments.Y``) or the
-  registry (the package ``sgb.experiments``): what experiments share lies below them.
+  registry (the package ``sgb.experiments``): what experiments share lies below them;
+- the README's map of the layers is true: every module has its place there (its own row,
+  or the row of a package above it; a package ``__init__`` the layer its heading names),
+  and none imports from a layer after its own.
 """
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
 
 PACKAGE = Path(__file__).resolve().parent.parent / "sgb"
+README = PACKAGE.parent / "README.md"
 EXPERIMENTS = "sgb.experiments"
 TOP = frozenset({"sgb.__main__", "sgb.grid"})
 
@@ -112,6 +117,53 @@ def sideways(edges: dict[str, set[str]]) -> list[str]:
     ]
 
 
+def readme_layers(text: str) -> tuple[list[str], dict[str, str], dict[str, str]]:
+    """The README's map of the layers: the layers in order (each a bold heading), each row's
+    module -> its layer, and each module a heading names -> its layer."""
+    section = text.split("## Map of the layers", 1)[1].split("\n## ", 1)[0]
+    order: list[str] = []
+    rows: dict[str, str] = {}
+    named: dict[str, str] = {}
+    prose = ""  # a heading and the lines of its paragraph
+    for line in section.splitlines():
+        if heading := re.match(r"\*\*(.+?)\*\*(.*)", line):
+            order.append(heading.group(1))
+            prose = heading.group(2)
+        elif row := re.match(r"\| `(sgb[\w.]*)` \|", line):
+            rows[row.group(1)] = order[-1]
+        elif line.strip() and not line.startswith("|") and prose:
+            prose += " " + line
+        else:
+            prose = ""
+        if order and prose:
+            named |= dict.fromkeys(re.findall(r"`(sgb[\w.]*)`", prose), order[-1])
+    return order, rows, named
+
+
+def layer_of(name: str, rows: dict[str, str], named: dict[str, str]) -> str | None:
+    """The layer of module ``name``: its row's, else the row's of the nearest package above
+    it, else the layer whose heading names it; None where the map has no place for it."""
+    parts = name.split(".")
+    for n in range(len(parts), 1, -1):
+        if ".".join(parts[:n]) in rows:
+            return rows[".".join(parts[:n])]
+    return named.get(name)
+
+
+def against_the_map(edges: dict[str, set[str]], text: str) -> tuple[list[str], list[str]]:
+    """The modules the map has no place for, and the imports from a later layer."""
+    order, rows, named = readme_layers(text)
+    place = {name: layer_of(name, rows, named) for name in edges}
+    missing = sorted(name for name, layer in place.items() if layer is None)
+    later = [
+        f"{a} ({place[a]}) -> {b} ({place[b]})"
+        for a, targets in sorted(edges.items())
+        for b in sorted(targets)
+        if place[a] and place[b] and order.index(place[b]) > order.index(place[a])
+    ]
+    return missing, later
+
+
 def test_the_graph_is_read():
     edges = graph()
     assert "sgb.experiments.fig2" in edges and "sgb.rl.ppo" in edges
@@ -150,6 +202,24 @@ def test_the_rules_catch_what_they_forbid():
     ]
 
 
+def test_the_map_catches_a_module_out_of_place():
+    text = """## Map of the layers
+
+**Low** (`sgb`)
+
+| `sgb.a` | a |
+| `sgb.plots` | figures |
+
+**High**: the command line
+(`sgb.__main__`) runs it
+
+## Next
+"""
+    edges = {"sgb": set(), "sgb.a": {"sgb.__main__"}, "sgb.plots.x": {"sgb.a"}}
+    edges |= {"sgb.__main__": {"sgb.plots.x"}, "sgb.b": set()}
+    assert against_the_map(edges, text) == (["sgb.b"], ["sgb.a (Low) -> sgb.__main__ (High)"])
+
+
 def test_no_cycle():
     assert cycle(graph()) is None
 
@@ -160,3 +230,9 @@ def test_no_upward_import_of_the_experiments():
 
 def test_no_experiment_imports_another():
     assert sideways(graph()) == []
+
+
+def test_the_readme_map_is_true_to_the_imports():
+    missing, later = against_the_map(graph(), README.read_text())
+    assert missing == [], "modules the README's map of the layers leaves out"
+    assert later == [], "imports from a layer the README's map puts after the importer's"
