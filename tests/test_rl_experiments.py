@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from reach import EPISODE, SHARED_STEP, shared_step_config
 
-from sgb.experiments import get_experiment, rl, rl_spread
+from sgb.experiments import fig3, fig4_5, get_experiment, rl_spread
 from sgb.provenance import read_results
 from sgb.rl import protocols
 from sgb.rl.agent import NetworkConfig
@@ -25,7 +25,7 @@ def test_summary_divides_by_the_mean_vanilla_return():
         {"settings": "ours", "cell_types": 16, "seed": 1, "final_return": 150.0},
         {"settings": "authors", "cell_types": 16, "seed": 0, "final_return": 400.0},
     ]
-    rows = {(r["settings"], r["cell_types"]): r for r in rl.summarise_cell_types(runs)}
+    rows = {(r["settings"], r["cell_types"]): r for r in fig3.summarise_cell_types(runs)}
     assert rows["ours", None]["fraction"] == pytest.approx(1.0)
     assert rows["ours", 16]["fraction"] == pytest.approx(0.5)
     assert rows["ours", 16]["sem_fraction"] == pytest.approx(50.0 / 200.0)  # sem(50, 150) = 50
@@ -35,7 +35,7 @@ def test_summary_divides_by_the_mean_vanilla_return():
 
 def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
     config = sweep_config("ant", "cpu")
-    runs = rl.sweep_runs(config)
+    runs = fig3.sweep_runs(config)
     seeds = Counter((s, k) for s, k, _ in runs)
     assert seeds[("ours", None)] == seeds[("ours", 128)] == seeds[("authors", 16)] == 10
     assert seeds[("ours", 64)] == seeds[("authors", 32)] == seeds[("ours_typed_inputs", 16)] == 5
@@ -91,7 +91,7 @@ def test_bad_env_raises():
     with pytest.raises(ValueError, match="env"):
         sweep_config("hopper", "cpu")
     with pytest.raises(ValueError, match="env"):
-        rl.run_fig4("smoke", ".", env="halfcheetah")
+        fig4_5.run_fig4("smoke", ".", env="halfcheetah")
 
 
 def test_spread_summary_pairs_each_seed_with_its_own_mean_network():

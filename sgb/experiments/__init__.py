@@ -138,7 +138,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         shares_runs=True,
     ),
     "fig3": Experiment(
-        "rl",
+        "fig3",
         "run_fig3",
         "FIG3_PROFILES",
         chapter=5,
@@ -154,7 +154,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         shares_runs=True,
     ),
     "fig4": Experiment(
-        "rl",
+        "fig4_5",
         "run_fig4",
         "FIG4_PROFILES",
         chapter=5,
@@ -168,7 +168,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
     ),
     "fig5": Experiment(
-        "rl",
+        "fig4_5",
         "run_fig5",
         "FIG5_PROFILES",
         chapter=5,
