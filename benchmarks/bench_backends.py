@@ -16,9 +16,10 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-from sgb.experiments.rl import sweep_config
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance
+from sgb.recording import write_results
 from sgb.rl.ppo import PPOConfig, train
+from sgb.rl.sweep import sweep_config
 
 BACKENDS = ("spring", "positional", "generalized", "mjx")
 

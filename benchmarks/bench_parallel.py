@@ -25,14 +25,15 @@ import sys
 import time
 from pathlib import Path
 
-from sgb.provenance import provenance, write_results
+from sgb.provenance import provenance
+from sgb.recording import write_results
 
 ONE_THREAD = "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"
 
 PPO_WORKER = """
 import json, sys
 from dataclasses import replace
-from sgb.experiments.rl import sweep_config
+from sgb.rl.sweep import sweep_config
 from sgb.rl.ppo import train
 config = replace(sweep_config("ant", "cpu").ppo, total_steps={steps}, num_evals=3)
 result = train(config, seed=0, progress=False)
@@ -43,12 +44,12 @@ print(json.dumps({{"rate": result.train_steps_per_s}}))
 FIG2_WORKER = """
 import json, time
 from sgb.data import load
-from sgb.experiments import fig2
-sweep = fig2.PROFILES["cpu"]["fashion-mnist"][0]
+from sgb import supervised_sweep
+sweep = supervised_sweep.SWEEPS["cpu"]["fashion-mnist"][0]
 data = load("fashion-mnist", seed=0)
 start = time.perf_counter()
 for setting in {settings}:
-    fig2.run_one("sgb", setting, 0, data, sweep)
+    supervised_sweep.run_one("sgb", setting, 0, data, sweep)
 print(json.dumps({{"rate": {n} / (time.perf_counter() - start)}}))
 """
 FIG2_SETTINGS = (10, 69, 387)  # hidden cell types: about 10x, 100x and 700x compression

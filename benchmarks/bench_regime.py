@@ -60,12 +60,12 @@ def phases(cell_types: int | None, iterations: int) -> dict:
 
     import jax
 
-    from sgb.experiments.regime import PROFILES, RegimeRun, run_config
     from sgb.rl.losses import ppo_loss
     from sgb.rl.ppo import init_state
+    from sgb.rl.regime_runs import RUNS, RegimeRun, run_config
     from sgb.rl.trainer import make_trainer
 
-    config = run_config(PROFILES["cpu"], RegimeRun(cell_types, 0))
+    config = run_config(RUNS["cpu"], RegimeRun(cell_types, 0))
     trainer = make_trainer(config.step_settings())
     ts = trainer.restart_all(init_state(config, seed=0))
     steps = config.steps_per_iteration
@@ -197,7 +197,8 @@ def main() -> None:
     start = time.perf_counter()
     rows = [measure(k, args.rounds, args.iterations) for k in (None, 64)]
     print(table(rows))
-    from sgb.provenance import provenance, write_results
+    from sgb.provenance import provenance
+    from sgb.recording import write_results
 
     record = provenance(vars(args), "cpu", [0], time.perf_counter() - start)
     write_results(args.out, {"rows": rows, "table": table(rows).splitlines()}, record)

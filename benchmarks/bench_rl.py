@@ -36,7 +36,8 @@ import numpy as np
 from brax.training.agents.ppo import networks as brax_networks
 from brax.training.agents.ppo import train as brax_ppo
 
-from sgb.provenance import atomic_write, git_commit, provenance, write_results
+from sgb.provenance import atomic_write, git_commit, provenance
+from sgb.recording import write_results
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.envs import EnvSpec, make_env
 from sgb.rl.population import population_returns

@@ -26,19 +26,14 @@ from typing import Any
 
 from sgb import cluster, validation
 from sgb.divergence import TrainingDiverged
-from sgb.experiments import (
-    CHAPTERS,
-    DEFAULT_PROFILE,
-    EXPERIMENTS,
-    PROFILE_NAMES,
-    get_experiment,
-)
+from sgb.experiments import CHAPTERS, EXPERIMENTS, get_experiment
+from sgb.manifest import MAINTAINER_FLAG
 from sgb.paths import committed_results
+from sgb.profiles import DEFAULT_PROFILE, PROFILE_NAMES
 from sgb.recording import pick
 
 RESULTS_ENV = "SGB_RESULTS"
 DEFAULT_OUT_DIR = Path("sgb-results")
-MAINTAINER_FLAG = "--maintainer-write-committed"
 _WIDTH = 88
 
 
@@ -250,7 +245,7 @@ def main(argv: list[str] | None = None) -> int:
     if argv[:1] == ["grid"]:
         from sgb import grid
 
-        return grid.main(argv[1:])
+        return grid.main(argv[1:], main)
     args = build_parser().parse_args(argv)
     options = {k: v for k, v in (("dataset", args.dataset), ("env", args.env)) if v is not None}
     experiment = get_experiment(args.experiment)

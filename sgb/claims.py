@@ -23,9 +23,9 @@ import pandas as pd
 from scipy import stats as scipy_stats
 
 from sgb import stats, verdicts
-from sgb.experiments.dgb_full import figure2_records
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.results import load as load_results
+from sgb.supervised_sweep import figure2_records
 
 # what each claim's test estimates, by key prefix
 EFFECTS = {

@@ -77,6 +77,11 @@ def of_params(params: dict) -> Genome:
     return {path: LayerGenome(g["mu"], g["rho"]) for path, g in _genome_nodes(tree)}
 
 
+def mean_sigma(actor_params: dict) -> float:
+    """Mean sigma over every type pair of the actor's SGB hidden layers."""
+    return float(np.mean([np.mean(sigma(g)) for g in of_params(actor_params).values()]))
+
+
 def with_tables(params: dict, genome: Genome) -> dict:
     """A copy of the Flax ``{"params": ...}`` tree ``params`` whose layers at the paths of
     ``genome`` hold its tables (``of_params``'s inverse). Each layer's ``mu`` and ``rho``

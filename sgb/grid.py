@@ -34,42 +34,20 @@ import subprocess
 import sys
 import time
 import warnings
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
 from sgb import cluster, resume, runlock
-from sgb.manifest import add
+from sgb.manifest import MAINTAINER_FLAG, add
 from sgb.provenance import atomic_write
+from sgb.queued import Queue
 
 REPOSITORY = Path(__file__).resolve().parent.parent  # the checkout this package lies in
 GRID_ENV = "SGB_GRID"
 LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
 # The long runs, in the order they train: (experiment, profile).
 QUEUE = (("regime", "cpu"),)
-
-
-@dataclass(frozen=True)
-class QueuedRun:
-    """One run of a queued experiment: its name, its checkpoint (a ``.msgpack`` with its
-    ``.json`` sidecar), its state file while unfinished, its chunks, and, once finished,
-    its wall time (s)."""
-
-    label: str
-    checkpoint: Path
-    state: Path
-    chunks: int
-    finished: bool
-    wall_time_s: float | None = None
-
-
-@dataclass(frozen=True)
-class Queue:
-    """A queued experiment at one profile: its results file and its runs, in order."""
-
-    results: Path
-    runs: tuple[QueuedRun, ...]
 
 
 def worktree() -> Path:
@@ -109,11 +87,10 @@ def become_idle(core: int) -> None:
         AUTOGROUP.write_text("19")
 
 
-def work(core: int, logs: Path) -> int:
-    """A worker: idle on ``core``, it runs the queue's experiments in order, each taking
-    the runs no other worker holds, holding its worker lock meanwhile; an exit status."""
-    from sgb.__main__ import MAINTAINER_FLAG, main
-
+def work(core: int, logs: Path, main: Callable[[list[str]], int]) -> int:
+    """A worker: idle on ``core``, it runs the queue's experiments in order (each by the
+    command line's ``main``), each taking the runs no other worker holds, holding its
+    worker lock meanwhile; an exit status."""
     become_idle(core)
     with runlock.claim(logs / f"worker-{core}") as mine:
         if not mine:
@@ -299,8 +276,9 @@ def land(source: Path, target: Path, queue: tuple[tuple[str, str], ...] = QUEUE)
 # --- the command line -------------------------------------------------------------------
 
 
-def main(argv: list[str]) -> int:
-    """``python -m sgb grid start|status|land|stop|work``; an exit status."""
+def main(argv: list[str], reproduce: Callable[[list[str]], int]) -> int:
+    """``python -m sgb grid start|status|land|stop|work``, a worker running each queued
+    experiment by ``reproduce`` (the command line's ``main``); an exit status."""
     parser = argparse.ArgumentParser(prog="python -m sgb grid", description=__doc__.split("\n")[0])
     verbs = parser.add_subparsers(dest="verb", required=True)
     begin = verbs.add_parser("start", help="start the workers in a worktree of HEAD")
@@ -316,7 +294,7 @@ def main(argv: list[str]) -> int:
     warnings.filterwarnings("ignore", message="Brax System", category=UserWarning)
     try:
         if args.verb == "work":
-            return work(args.core, Path.cwd() / LOGS)
+            return work(args.core, Path.cwd() / LOGS, reproduce)
         if args.verb == "start":
             for core, pid in start(args.workers).items():
                 print(f"worker on core {core}: pid {pid}, log {tree / LOGS}/worker-{core}.log")

@@ -2,7 +2,7 @@
 bytes of every results file under ``results/``, by its path there (``"rl/fig5_ant_cpu.json"``),
 as the run that wrote it left them.
 
-``sgb.provenance.write_results`` enters every file it writes into the committed results
+``sgb.recording.write_results`` enters every file it writes into the committed results
 (``record``); the readers (``sgb.results.load``, through which the chapters and the
 scorecard read) refuse a file whose bytes differ from its entry, or that has none
 (``verify``), so that a file edited by hand is refused, by name. A results file that a run
@@ -29,6 +29,9 @@ from sgb.provenance import atomic_write, read_results, verify_checksum
 from sgb.validation import CorruptFile
 
 NAME = "MANIFEST.json"
+# the flag without which neither this module nor ``python -m sgb reproduce`` writes the
+# committed results
+MAINTAINER_FLAG = "--maintainer-write-committed"
 REPOSITORY = Path(__file__).resolve().parent.parent  # the git checkout of this package
 ABOUT = (
     "sha256 of the bytes of each results file, entered by the run that wrote it or by "
@@ -192,8 +195,6 @@ def add(paths: Iterable[str | Path]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     """``python -m sgb.manifest --maintainer-write-committed PATH...``: ``add``."""
-    from sgb.__main__ import MAINTAINER_FLAG
-
     parser = argparse.ArgumentParser(
         prog="python -m sgb.manifest",
         description="Enter results files that a run wrote on another machine, and that are "

@@ -13,9 +13,9 @@ import numpy as np
 
 from sgb import claims, verdicts
 from sgb.claims import Row
-from sgb.experiments.dgb_full import figure2_records
 from sgb.results import Payload
 from sgb.rl.regimes import authors_scale
+from sgb.supervised_sweep import figure2_records
 
 NOT_RUN = "not yet run"
 ROW_PARTS = ("verdict", "ours", "detectable", "decide")

@@ -13,13 +13,76 @@ their sum, whenever each part ran, and ``git_commits`` lists the commits that ma
 """
 
 import dataclasses
+import json
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
-from sgb.experiments import check_profile
-from sgb.provenance import earlier_results, git_commit, provenance, results_file, write_results
+from sgb import manifest
+from sgb.profiles import check_profile
+from sgb.provenance import (
+    CHECKSUM,
+    SAME_RUN_FIELDS,
+    _jsonable,
+    atomic_write,
+    git_commit,
+    payload_digest,
+    provenance,
+    read_results,
+    results_file,
+)
+from sgb.validation import RESTART, CorruptFile
+
+
+def write_results(path: str | Path, results: dict[str, Any], record: dict[str, Any]) -> Path:
+    """Write ``{"provenance": record, "results": results}`` as strict JSON (non-finite
+    numbers as ``null``), atomically, with the payload's ``payload_digest`` in its
+    provenance (``CHECKSUM``); returns the path. A file written into the committed results
+    is entered into their manifest (``sgb.manifest.record``).
+
+    A file that already holds these results, of the same config, profile and seeds, is
+    left as it is: a rerun that reused finished runs, or came out the same, does not
+    replace the provenance of the run that made them (its commit, date and wall time)."""
+    payload = {"provenance": _jsonable(record), "results": _jsonable(results)}
+    payload["provenance"][CHECKSUM] = payload_digest(payload)
+    text = json.dumps(payload, indent=1, sort_keys=False, allow_nan=False) + "\n"
+    if not _holds_the_same(path, json.loads(text)):
+        atomic_write(path, text.encode())
+    manifest.record(path)
+    return Path(path)
+
+
+def _holds_the_same(path: str | Path, payload: dict[str, Any]) -> bool:
+    try:
+        old = read_results(path)
+    except (OSError, ValueError):
+        return False
+    if not isinstance(old, dict) or old.get("results") != payload["results"]:
+        return False
+    before, now = old.get("provenance") or {}, payload["provenance"]
+    return all(before.get(key) == now.get(key) for key in SAME_RUN_FIELDS)
+
+
+def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
+    """The results an earlier run of ``config`` left in ``path`` (empty if there is no file),
+    so that a rerun continues it; a ValueError if a run of another config wrote the file, a
+    ``sgb.validation.CorruptFile`` if it is not a results file with a config or, in the
+    committed results, not the file its run wrote (``sgb.manifest.verify``)."""
+    if not Path(path).exists():
+        return {}
+    payload = read_results(path)
+    manifest.verify(path)
+    for part in ("provenance", "results"):
+        if not isinstance(payload, dict) or not isinstance(payload.get(part), dict):
+            problem = f'has no "{part}" object, so is not a results file'
+            raise CorruptFile(path, problem, RESTART, "results file")
+    if "config" not in payload["provenance"]:
+        raise CorruptFile(path, "has no config in its provenance", RESTART, "results file")
+    if payload["provenance"]["config"] != json.loads(json.dumps(_jsonable(config))):
+        raise ValueError(f"{path} holds results of another config; move it away to run this one")
+    return payload["results"]
+
 
 Config = TypeVar("Config")
 

@@ -10,9 +10,9 @@ import pytest
 from reach import SPEC, reach_config
 
 from sgb import genome, hedging
+from sgb.budget import BudgetConfig
 from sgb.evolution import EvolutionConfig
 from sgb.experiments.bet_hedging import HedgingConfig
-from sgb.experiments.dgb_budget import BudgetConfig
 from sgb.experiments.evolution import EvolutionSweep
 from sgb.priors import GaussianPrior, ScaleMixturePrior
 from sgb.rl import ppo

@@ -15,11 +15,13 @@ import jax
 import pytest
 
 import sgb.__main__
-from sgb.__main__ import MAINTAINER_FLAG, build_parser, experiments_help, jax_backend, main
-from sgb.experiments import CHAPTERS, EXPERIMENTS, PROFILE_NAMES, bayes_by_backprop, fig2
+from sgb.__main__ import build_parser, experiments_help, jax_backend, main
+from sgb.experiments import CHAPTERS, EXPERIMENTS, bayes_by_backprop, fig2
+from sgb.manifest import MAINTAINER_FLAG
 from sgb.paths import committed_results
-from sgb.provenance import git_commit, write_results
-from sgb.recording import start
+from sgb.profiles import PROFILE_NAMES
+from sgb.provenance import git_commit
+from sgb.recording import start, write_results
 
 ROOT = Path(__file__).resolve().parent.parent
 

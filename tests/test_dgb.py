@@ -173,7 +173,7 @@ def test_dgb_accuracy_on_digits_rises_with_gnet_width_at_low_compression():
 
 
 def test_budget_run_killed_after_a_chunk_resumes_and_ends_as_an_uninterrupted_one(tmp_path):
-    from sgb.experiments.dgb_budget import BudgetConfig, train_with_budget
+    from sgb.budget import BudgetConfig, train_with_budget
 
     config = BudgetConfig(
         dataset="toy",

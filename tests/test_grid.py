@@ -16,7 +16,7 @@ from interrupt import killed_at_chunk
 
 from sgb import grid, runlock
 from sgb.experiments import regime
-from sgb.rl import checkpoints
+from sgb.rl import checkpoints, regime_runs
 from sgb.rl.trainer import make_trainer
 
 SMOKE = (("regime", "smoke"),)
@@ -88,9 +88,9 @@ def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, m
     """Workers' results (a run killed in its second chunk) are landed in the repository; a
     fresh copy of it resumes the run at its second chunk, and the run ends as one never
     stopped; landed again, the finished run replaces its state."""
-    config = regime.PROFILES["smoke"]
-    vanilla = regime.run_config(config, config.runs[0])
-    name = regime.checkpoint_name(config.runs[0], "smoke")
+    config = regime_runs.RUNS["smoke"]
+    vanilla = regime_runs.run_config(config, config.runs[0])
+    name = regime_runs.checkpoint_name(config.runs[0], "smoke")
     uninterrupted = tmp_path / "uninterrupted"
     regime.run("smoke", uninterrupted)
 

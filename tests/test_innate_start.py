@@ -19,6 +19,7 @@ from sgb.rl.agent import NetworkConfig
 from sgb.rl.finetune import individual_key, plain_actor, plain_network
 from sgb.rl.population import _keys, population_returns
 from sgb.rl.ppo import Start, TrainResult, evaluate, init_state, train
+from sgb.rl.sweep import sweep_config
 from sgb.rl.trainer import make_trainer
 
 GENOME = reach_config(4, network=NetworkConfig(hidden=(16, 16), cell_types=4, rho_init=-1.0))
@@ -129,7 +130,7 @@ def test_the_curve_is_scored_by_its_area_and_its_returns_at_fractions_of_the_bud
 
 def test_the_profiles_fine_tune_figure_3s_ppo_on_long_legs():
     cpu = innate_start.PROFILES["cpu"]
-    fig3 = innate_start.sweep_config("ant", "cpu").ppo
+    fig3 = sweep_config("ant", "cpu").ppo
     assert cpu.ppo == replace(
         fig3, env=replace(fig3.env, variant="long_legs"), total_steps=5_000_000, num_evals=8
     )

@@ -10,7 +10,8 @@ import pytest
 
 from sgb import claims, manifest, provenance, results
 from sgb.paths import committed_results
-from sgb.provenance import earlier_results, read_results, write_results
+from sgb.provenance import read_results
+from sgb.recording import earlier_results, write_results
 from sgb.validation import CorruptFile
 
 RUN = {"config": {"lr": 0.1}, "profile": "cpu", "seeds": [0]}

@@ -10,11 +10,12 @@ import pytest
 from sgb import moments
 from sgb.celltypes import expand_table
 from sgb.data import load
-from sgb.experiments import fig2, mean_gap
+from sgb.experiments import mean_gap
 from sgb.genome import of_params, with_tables
 from sgb.individuals import apply_mean_network, apply_population, init_params
 from sgb.layers import SGBMLP
 from sgb.provenance import read_results
+from sgb.supervised_sweep import run_one
 
 matplotlib.use("Agg")
 
@@ -165,7 +166,7 @@ def test_mean_gap_smoke_runs_end_to_end_and_resumes(tmp_path, monkeypatch):
     first = records[0]
     assert first["rho_init"] == config.sweep.sgb.rho_init
     data = load("digits")
-    reference = fig2.run_one("sgb", first["setting"], first["seed"], data, config.sweep)
+    reference = run_one("sgb", first["setting"], first["seed"], data, config.sweep)
     assert first["individuals"] == reference["individuals"]
     assert first["mean_network"] == reference["mean_network"]
 

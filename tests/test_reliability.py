@@ -13,7 +13,8 @@ from sgb.__main__ import main
 from sgb.data import digits
 from sgb.dgb import DGBConfig
 from sgb.divergence import TrainingDiverged
-from sgb.provenance import read_results, results_file, write_results
+from sgb.provenance import read_results, results_file
+from sgb.recording import write_results
 from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate, train_classifier
 
 

@@ -7,8 +7,8 @@ import shutil
 import pytest
 
 from sgb import claims, manifest, results, schemas
-from sgb.experiments import dgb_full
 from sgb.paths import committed_results
+from sgb.supervised_sweep import figure2_records
 from sgb.validation import CorruptFile
 
 
@@ -199,7 +199,7 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
     assert len(table) == len(payload["results"]["cells"])
     rounds = payload["provenance"]["config"]["dgb"]["rounds"]
     finished = table[table["rounds"] == rounds].set_index(["target ratio", "seed"])
-    records = dgb_full.figure2_records(payload["results"], rounds)
+    records = figure2_records(payload["results"], rounds)
     assert len(records) == len(finished) > 0
     for r in records:
         row = finished.loc[(r["setting"], r["seed"])]

@@ -7,11 +7,14 @@ import numpy as np
 import pytest
 from reach import EPISODE, SHARED_STEP, shared_step_config
 
-from sgb.experiments import get_experiment, rl, rl_spread
+from sgb.experiments import fig3, fig4_5, get_experiment, rl_spread
 from sgb.provenance import read_results
 from sgb.rl import protocols
 from sgb.rl.agent import NetworkConfig
+from sgb.rl.protocols import population_config
 from sgb.rl.regimes import with_settings
+from sgb.rl.runs import checkpoint_name
+from sgb.rl.sweep import sweep_config
 
 
 def test_summary_divides_by_the_mean_vanilla_return():
@@ -22,7 +25,7 @@ def test_summary_divides_by_the_mean_vanilla_return():
         {"settings": "ours", "cell_types": 16, "seed": 1, "final_return": 150.0},
         {"settings": "authors", "cell_types": 16, "seed": 0, "final_return": 400.0},
     ]
-    rows = {(r["settings"], r["cell_types"]): r for r in rl.summarise_cell_types(runs)}
+    rows = {(r["settings"], r["cell_types"]): r for r in fig3.summarise_cell_types(runs)}
     assert rows["ours", None]["fraction"] == pytest.approx(1.0)
     assert rows["ours", 16]["fraction"] == pytest.approx(0.5)
     assert rows["ours", 16]["sem_fraction"] == pytest.approx(50.0 / 200.0)  # sem(50, 150) = 50
@@ -31,8 +34,8 @@ def test_summary_divides_by_the_mean_vanilla_return():
 
 
 def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
-    config = rl.sweep_config("ant", "cpu")
-    runs = rl.sweep_runs(config)
+    config = sweep_config("ant", "cpu")
+    runs = fig3.sweep_runs(config)
     seeds = Counter((s, k) for s, k, _ in runs)
     assert seeds[("ours", None)] == seeds[("ours", 128)] == seeds[("authors", 16)] == 10
     assert seeds[("ours", 64)] == seeds[("authors", 32)] == seeds[("ours_typed_inputs", 16)] == 5
@@ -50,7 +53,7 @@ def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
     assert untyped == replace(authors, network=replace(authors.network, typed_inputs=False))
     typed = with_settings(net16, "ours_typed_inputs")
     assert typed == replace(net16, network=replace(net16.network, typed_inputs=True))
-    names = {rl.checkpoint_name("ant", k, seed, "cpu", s) for s, k, seed in runs}
+    names = {checkpoint_name("ant", k, seed, "cpu", s) for s, k, seed in runs}
     assert len(names) == len(runs)
 
 
@@ -73,22 +76,22 @@ def test_correlation_and_paired_test_on_known_populations():
 def test_registered_profiles():
     for name in ("fig3", "fig4", "fig5", "spread"):
         assert set(get_experiment(name).profiles) == {"smoke", "cpu", "paper"}
-    assert get_experiment("fig3").profiles["cpu"]["halfcheetah"] == rl.sweep_config(
+    assert get_experiment("fig3").profiles["cpu"]["halfcheetah"] == sweep_config(
         "halfcheetah", "cpu"
     )
     assert get_experiment("fig4").profiles["smoke"].mean_network_conditions == ()
     assert get_experiment("fig5").profiles["smoke"].conditions == ("normal",)
-    paper = rl.sweep_config("ant", "paper")
+    paper = sweep_config("ant", "paper")
     assert paper.ppo.num_envs == 2048 and paper.ppo.total_steps == 50_000_000
     assert paper.cell_types == (None, 128, 64, 48, 32, 16) and len(paper.seeds) == 5
-    assert rl.population_config("cpu").n_individuals == 100
+    assert population_config("cpu").n_individuals == 100
 
 
 def test_bad_env_raises():
     with pytest.raises(ValueError, match="env"):
-        rl.sweep_config("hopper", "cpu")
+        sweep_config("hopper", "cpu")
     with pytest.raises(ValueError, match="env"):
-        rl.run_fig4("smoke", ".", env="halfcheetah")
+        fig4_5.run_fig4("smoke", ".", env="halfcheetah")
 
 
 def test_spread_summary_pairs_each_seed_with_its_own_mean_network():

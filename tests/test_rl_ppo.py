@@ -342,7 +342,7 @@ def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one
 
 @SHARED_STEP
 def test_a_sweep_reuses_a_finished_run_only_with_the_same_settings(tmp_path):
-    from sgb.experiments.rl import finished_run
+    from sgb.rl.runs import finished_run
 
     config = shared_step_config()
     result = train(config, seed=0, progress=False)

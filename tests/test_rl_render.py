@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from sgb.experiments import rl
+from sgb.experiments import fig3
 from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.rl.envs import EnvSpec
@@ -32,7 +32,7 @@ def test_initial_pose_shows_a_body_and_longer_legs_show_more_of_it():
 
 
 def test_best_checkpoint_is_the_sgb_run_with_the_highest_return():
-    best = rl.best_checkpoint(committed_results(), "ant")
+    best = fig3.best_checkpoint(committed_results(), "ant")
     runs = read_results(committed_results() / "rl" / "fig3_ant_cpu.json")["results"]["runs"]
     returns = {r["checkpoint"]: r["final_return"] for r in runs if r["cell_types"] is not None}
     assert best.name == max(returns, key=returns.get) and best.exists()
@@ -40,7 +40,7 @@ def test_best_checkpoint_is_the_sgb_run_with_the_highest_return():
 
 
 def test_walking_frames_tile_individuals_that_move_and_score_them_as_the_population_does():
-    checkpoint = rl.best_checkpoint(committed_results(), "ant")
+    checkpoint = fig3.best_checkpoint(committed_results(), "ant")
     frames, returns = walking_frames(
         checkpoint, n_individuals=2, steps=6, every=3, width=64, height=48
     )

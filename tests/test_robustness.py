@@ -19,7 +19,6 @@ from sgb.__main__ import main
 from sgb.data import digits
 from sgb.dgb import DGBConfig
 from sgb.divergence import BLOWUP_FACTOR, FIT_BOUND, TrainingDiverged
-from sgb.experiments.rl import finished_run
 from sgb.genome import individual_kernel, layer_kl, softplus
 from sgb.priors import GaussianPrior
 from sgb.provenance import read_results
@@ -27,6 +26,7 @@ from sgb.rl import checkpoints, ppo
 from sgb.rl.agent import MLP, NetworkConfig
 from sgb.rl.normalizer import Normalizer, init_normalizer
 from sgb.rl.population import population_returns
+from sgb.rl.runs import finished_run
 from sgb.supervised import (
     ClassifierConfig,
     DenseConfig,

@@ -6,7 +6,8 @@ import json
 
 import numpy as np
 
-from sgb.experiments import fig2, sgb_full
+from sgb import supervised_sweep
+from sgb.experiments import sgb_full
 from sgb.provenance import read_results
 
 
@@ -14,7 +15,7 @@ def test_a_smoke_run_trains_each_variant_once_and_a_rerun_only_what_is_missing(
     tmp_path, monkeypatch
 ):
     trained = []
-    real = fig2.run_one
+    real = supervised_sweep.run_one
 
     def counted(kind, setting, seed, data, sweep):
         trained.append((sweep.sgb.kl_counting, sweep.sgb.rho_init))

@@ -6,7 +6,8 @@ from scipy import stats as scipy_stats
 
 from sgb import stats
 from sgb.__main__ import main
-from sgb.provenance import provenance, read_results, write_results
+from sgb.provenance import provenance, read_results
+from sgb.recording import write_results
 
 
 def test_sem_and_confidence_interval_cover_the_true_mean_at_the_stated_rate():

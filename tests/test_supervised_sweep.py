@@ -9,9 +9,16 @@ from sgb.compression import compression
 from sgb.data import Dataset, load
 from sgb.dgb import DGBConfig
 from sgb.experiments import fig2
-from sgb.experiments.fig2 import CompressionSweep, crossovers, run_one, summarise_compression
 from sgb.provenance import read_results
 from sgb.supervised import ClassifierConfig, DenseConfig, dense_accuracy, train_dense
+from sgb.supervised_sweep import (
+    CompressionSweep,
+    crossovers,
+    run_one,
+    summarise_compression,
+    sweep_cells,
+    sweep_summary,
+)
 
 
 def test_summary_and_crossover_of_synthetic_records():
@@ -38,7 +45,7 @@ def test_summary_and_crossover_of_synthetic_records():
     # difference -0.1 at log10 = 1 and +0.2 at log10 = 2: zero a third of the way
     (point,) = crossovers(summary)
     assert point == pytest.approx(10 ** (1 + 1 / 3))
-    both = fig2.sweep_summary(records)
+    both = sweep_summary(records)
     assert both["authors"]["crossovers"] == pytest.approx([3 * point])
 
 
@@ -106,6 +113,6 @@ def test_fashion_mnist_main_setting_counts_the_kl_per_synapse():
     assert sweep.hidden == (800,) and (sweep.in_types, sweep.out_types) == (30, 10)
     assert len(sweep.ratios) >= 7 and len(sweep.seeds) == 3 and sweep.dgb.rounds >= 100
     sizes = (784, 800, 10)
-    cells = fig2.sweep_cells(sweep, sizes)
+    cells = sweep_cells(sweep, sizes)
     authors = [compression(k, sizes, s, 30, 10, "authors") for k, s, _ in cells if k != "dense"]
     assert min(authors) < 25 and max(authors) >= 1000

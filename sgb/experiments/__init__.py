@@ -9,14 +9,11 @@ of it: the paper figure, the datasets or environments, and the cost of each prof
 """
 
 import importlib
-import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-PROFILE_NAMES = ("smoke", "cpu", "paper")
-DEFAULT_PROFILE = "smoke"
 # The book's chapters that run experiments (book/0N_*.ipynb), by number.
 CHAPTERS = {
     2: "Bayes by backprop",
@@ -141,7 +138,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         shares_runs=True,
     ),
     "fig3": Experiment(
-        "rl",
+        "fig3",
         "run_fig3",
         "FIG3_PROFILES",
         chapter=5,
@@ -157,7 +154,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         shares_runs=True,
     ),
     "fig4": Experiment(
-        "rl",
+        "fig4_5",
         "run_fig4",
         "FIG4_PROFILES",
         chapter=5,
@@ -171,7 +168,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
     ),
     "fig5": Experiment(
-        "rl",
+        "fig4_5",
         "run_fig5",
         "FIG5_PROFILES",
         chapter=5,
@@ -333,15 +330,3 @@ def get_experiment(name: str) -> Experiment:
     if name not in EXPERIMENTS:
         raise ValueError(f"unknown experiment {name!r}; available: {sorted(EXPERIMENTS)}")
     return EXPERIMENTS[name]
-
-
-def check_profile(profile: str) -> str:
-    """Validate a profile name."""
-    if profile not in PROFILE_NAMES:
-        raise ValueError(f"unknown profile {profile!r}; choose one of {PROFILE_NAMES}")
-    return profile
-
-
-def profile_from_env() -> str:
-    """The profile named by the environment variable ``SGB_PROFILE`` (default smoke)."""
-    return check_profile(os.environ.get("SGB_PROFILE", DEFAULT_PROFILE))

@@ -31,14 +31,14 @@ from typing import Any
 import numpy as np
 
 from sgb import hedging, validation
-from sgb.experiments import PROFILE_NAMES, check_profile
-from sgb.experiments.rl import checkpoint_name, checkpoint_root
-from sgb.experiments.rl_spread import mean_sigma
+from sgb.genome import mean_sigma
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl.envs import VARIANTS
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
+from sgb.rl.runs import checkpoint_name, checkpoint_root
 
 POPULATIONS = ("individuals", "clones")
 QS = (0.25, 0.5, 0.75)  # survival thresholds, shares of the mean network's normal return

@@ -20,11 +20,11 @@ from pathlib import Path
 from tqdm.auto import tqdm
 
 from sgb import runlock, validation
+from sgb.budget import BudgetConfig, sizes_and_width, train_with_budget
 from sgb.compression import CONVENTIONS, compression, dense_param_count
 from sgb.data import load
 from sgb.dgb import DGBConfig
-from sgb.experiments import PROFILE_NAMES
-from sgb.experiments.dgb_budget import BudgetConfig, sizes_and_width, train_with_budget
+from sgb.profiles import PROFILE_NAMES
 from sgb.recording import Recording, start
 
 
@@ -139,23 +139,3 @@ def _write(recording: Recording, results: dict) -> Path:
     )
     seeds = sorted({cell["seed"] for cell in cells})
     return recording.write(results, seeds, parts=[c for cell in cells for c in cell["records"]])
-
-
-def figure2_records(results: dict, rounds: int) -> list[dict]:
-    """The cells that trained all ``rounds``, as Figure 2's sweep records them: ``model``
-    ("dgb"), ``setting`` (the target ratio), ``seed``, ``compression`` (ours),
-    ``compression_authors``, ``nominal_ratio`` and ``accuracy``, the test accuracy of the
-    network of best validation accuracy (a fraction)."""
-    return [
-        {
-            "model": "dgb",
-            "setting": cell["ratio"],
-            "seed": cell["seed"],
-            "compression": cell["compression_ours"],
-            "compression_authors": cell["compression_authors"],
-            "nominal_ratio": cell["nominal_ratio"],
-            "accuracy": cell["records"][-1]["test_accuracy"],
-        }
-        for cell in results["cells"].values()
-        if cell["records"] and cell["records"][-1]["rounds"] == rounds
-    ]

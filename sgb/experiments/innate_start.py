@@ -24,7 +24,7 @@ its statistics then keep updating as training goes, the genome's 2M observations
 normal body still counted beside the long-legged body's. ``fresh`` starts with a fresh
 normalizer, as any run from scratch does.
 
-PPO: Figure 3's settings at the profile (``sgb.experiments.rl.sweep_config("ant",
+PPO: Figure 3's settings at the profile (``sgb.rl.sweep.sweep_config("ant",
 profile)``), on the long-legged body, with ``total_steps`` of the profile and ``num_evals``
 evaluations. Seeds pair the runs: fine-tuning seed s gives every start the same critic
 initialisation, environment resets and evaluation episodes.
@@ -66,8 +66,7 @@ from pathlib import Path
 import numpy as np
 
 from sgb import validation
-from sgb.experiments import PROFILE_NAMES, check_profile
-from sgb.experiments.rl import CHECKPOINT_DIR, checkpoint_name, checkpoint_root, sweep_config
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl.agent import NetworkConfig, Params
@@ -76,6 +75,8 @@ from sgb.rl.normalizer import Normalizer, init_normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig, Start, evaluate, initial_params, train
 from sgb.rl.protocols import load_agent
+from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, checkpoint_root
+from sgb.rl.sweep import sweep_config
 from sgb.rl.trainer import make_trainer
 from sgb.stats import sem
 

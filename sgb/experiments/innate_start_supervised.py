@@ -3,7 +3,7 @@
 fine-tuned as a plain MLP.
 
 Per seed, one SGB is trained as Figure 2's sweep trains its cell nearest ``ratio``
-(``sgb.experiments.mean_gap.cell_config``: the sweep's config, KL per synapse, from its
+(``sgb.supervised_sweep.cell_config``: the sweep's config, KL per synapse, from its
 rho start), on Fashion-MNIST at ``cpu``. Its K = ``eval_individuals`` individuals (the
 ones ``sgb.supervised.train_and_evaluate`` scores, drawn with the same keys), its mean
 network and K freshly initialised networks of the same widths then become plain
@@ -41,14 +41,12 @@ from sgb import validation
 from sgb.classifiers import DenseClassifier, dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
-from sgb.experiments import fig2
-from sgb.experiments.fig2 import CompressionSweep
-from sgb.experiments.mean_gap import cell_config
 from sgb.individuals import individual_kernels
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.stats import sem
 from sgb.supervised import dense_accuracy, train_and_evaluate
+from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
 from sgb.training import adam_state, cross_entropy_step, train_loop
 
 STARTS = ("individual", "mean", "fresh")
@@ -64,7 +62,7 @@ class SupervisedStartConfig:
     fine-tuning."""
 
     dataset: str = "fashion-mnist"
-    sweep: CompressionSweep = fig2.PROFILES["cpu"]["fashion-mnist"]["sweep"]
+    sweep: CompressionSweep = SWEEPS["cpu"]["fashion-mnist"]["sweep"]
     ratio: float = 10.0
     seeds: tuple[int, ...] = (0, 1, 2)
     evaluations: int = 4
@@ -191,11 +189,11 @@ def summarise(records: list[dict]) -> list[dict[str, Any]]:
 
 PROFILES: dict[str, SupervisedStartConfig] = {
     "smoke": SupervisedStartConfig(
-        dataset="digits", sweep=fig2.PROFILES["smoke"]["digits"]["sweep"], ratio=4.0, seeds=(0,)
+        dataset="digits", sweep=SWEEPS["smoke"]["digits"]["sweep"], ratio=4.0, seeds=(0,)
     ),
     "cpu": SupervisedStartConfig(),
     "paper": SupervisedStartConfig(
-        sweep=fig2.PROFILES["paper"]["fashion-mnist"]["sweep"], seeds=(0, 1, 2, 3, 4)
+        sweep=SWEEPS["paper"]["fashion-mnist"]["sweep"], seeds=(0, 1, 2, 3, 4)
     ),
 }
 

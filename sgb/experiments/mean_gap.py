@@ -39,13 +39,12 @@ from sgb import moments, validation
 from sgb.classifiers import dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
-from sgb.experiments import fig2
-from sgb.experiments.fig2 import CompressionSweep
 from sgb.individuals import init_params
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.stats import sem
-from sgb.supervised import ClassifierConfig, make_model, train_and_evaluate
+from sgb.supervised import make_model, train_and_evaluate
+from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
 
 METRICS = ("accuracy", "mean_network", "moment_network")
 
@@ -58,7 +57,7 @@ class MeanGapConfig:
     each for every seed of ``seeds``."""
 
     dataset: str = "fashion-mnist"
-    sweep: CompressionSweep = fig2.PROFILES["cpu"]["fashion-mnist"]["sweep"]
+    sweep: CompressionSweep = SWEEPS["cpu"]["fashion-mnist"]["sweep"]
     ratios: tuple[float, ...] = (10.0, 400.0)
     other_rho_init: float = -7.0
     other_rho_ratios: tuple[float, ...] = (10.0,)
@@ -89,22 +88,6 @@ def cells(config: MeanGapConfig, sizes: tuple[int, ...]) -> list[tuple[int, floa
     pairs = [(s, float(sweep.sgb.rho_init)) for s in settings(config.ratios)]
     pairs += [(s, float(config.other_rho_init)) for s in settings(config.other_rho_ratios)]
     return [(s, rho, seed) for seed in config.seeds for s, rho in pairs]
-
-
-def cell_config(
-    sweep: CompressionSweep, setting: int, seed: int, rho_init: float
-) -> ClassifierConfig:
-    """The SGB config Figure 2's ``run_one`` trains for ``setting`` and ``seed``, from
-    ``rho_init``."""
-    types = (sweep.in_types, *([setting] * len(sweep.hidden)), sweep.out_types)
-    return dataclasses.replace(
-        sweep.sgb,
-        cell_types=types,
-        hidden=sweep.hidden,
-        conv_features=sweep.conv_features,
-        seed=seed,
-        rho_init=rho_init,
-    )
 
 
 def _layer_record(start: dict, end: dict, max_travel: float) -> dict[str, Any]:
@@ -237,15 +220,13 @@ def summarise(records: list[dict]) -> list[dict[str, Any]]:
 PROFILES: dict[str, MeanGapConfig] = {
     "smoke": MeanGapConfig(
         dataset="digits",
-        sweep=fig2.PROFILES["smoke"]["digits"]["sweep"],
+        sweep=SWEEPS["smoke"]["digits"]["sweep"],
         ratios=(4.0, 30.0),
         other_rho_ratios=(4.0,),
         seeds=(0,),
     ),
     "cpu": MeanGapConfig(),
-    "paper": MeanGapConfig(
-        sweep=fig2.PROFILES["paper"]["fashion-mnist"]["sweep"], seeds=(0, 1, 2, 3, 4)
-    ),
+    "paper": MeanGapConfig(sweep=SWEEPS["paper"]["fashion-mnist"]["sweep"], seeds=(0, 1, 2, 3, 4)),
 }
 
 

@@ -58,14 +58,15 @@ import numpy as np
 from scipy import stats as scipy_stats
 
 from sgb import validation, verdicts
-from sgb.experiments import PROFILE_NAMES, check_profile, regime
-from sgb.experiments.rl import checkpoint_name, checkpoint_root
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.rl import regime_runs
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
+from sgb.rl.runs import checkpoint_name, checkpoint_root
 
 BODIES = ("normal", "long_legs")
 PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body
@@ -96,7 +97,9 @@ class Genome:
     def checkpoint(self, profile: str, env: str = "ant") -> str:
         """The file name of its checkpoint, trained at ``profile``."""
         if self.regime:
-            return regime.checkpoint_name(regime.RegimeRun(self.cell_types, self.seed), profile)
+            return regime_runs.checkpoint_name(
+                regime_runs.RegimeRun(self.cell_types, self.seed), profile
+            )
         return checkpoint_name(env, self.cell_types, self.seed, profile, self.settings)
 
 

@@ -23,14 +23,13 @@ import jax
 import numpy as np
 
 from sgb import validation
-from sgb.experiments import PROFILE_NAMES, check_profile
-from sgb.experiments.regime import PROFILES as REGIME_PROFILES
-from sgb.experiments.regime import RegimeRun, checkpoint_name, run_config
-from sgb.experiments.rl import CHECKPOINT_DIR, checkpoint_root, finished_run
+from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl import checkpoints
 from sgb.rl.ppo import PPOConfig
+from sgb.rl.regime_runs import RUNS, RegimeRun, checkpoint_name, run_config
+from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_root, finished_run
 from sgb.rl.trainer import make_trainer
 
 WALKING_SPEED = 1.0  # m/s: the forward reward per step equals the healthy reward (1)
@@ -76,7 +75,7 @@ def run(profile: str, out_dir: Path) -> Path:
     """Play every finished regime run of the profile not yet in the results file, writing
     the file after each; returns its path."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_gait_ant")
-    config, regime = recording.config, REGIME_PROFILES[recording.config.regime_profile]
+    config, regime = recording.config, RUNS[recording.config.regime_profile]
     runs = list(recording.earlier().get("runs", []))
     done = {(r["cell_types"], r["seed"], r["genome"]) for r in runs}
     for i, r in enumerate(regime.runs):

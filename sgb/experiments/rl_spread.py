@@ -14,19 +14,19 @@ from pathlib import Path
 import numpy as np
 
 from sgb import genome
-from sgb.experiments import check_profile
-from sgb.experiments.rl import (
-    CHECKPOINT_DIR,
-    checkpoint_name,
-    population_config,
-    seed_sem,
-    sweep_config,
-    trained_run,
-)
+from sgb.profiles import check_profile
 from sgb.recording import start
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
-from sgb.rl.protocols import PopulationConfig, individuals_vs_mean, load_agent, population_on
+from sgb.rl.protocols import (
+    PopulationConfig,
+    individuals_vs_mean,
+    load_agent,
+    population_config,
+    population_on,
+)
+from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, seed_sem, trained_run
+from sgb.rl.sweep import sweep_config
 
 
 @dataclass(frozen=True)
@@ -48,13 +48,6 @@ def spread_config(profile: str) -> SpreadConfig:
         return SpreadConfig((-5.0, -2.0), (0,), ppo, population)
     seeds = (0, 1, 2) if profile == "cpu" else (0, 1, 2, 3, 4)
     return SpreadConfig((-5.0, -3.0, -1.5), seeds, ppo, population)
-
-
-def mean_sigma(actor_params: dict) -> float:
-    """Mean sigma over every type pair of the actor's SGB hidden layers."""
-    return float(
-        np.mean([np.mean(genome.sigma(g)) for g in genome.of_params(actor_params).values()])
-    )
 
 
 def summarise_spread(runs: list[dict]) -> list[dict]:
@@ -141,7 +134,7 @@ def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]
                     "sigma_init": float(genome.softplus(rho)),
                     "seed": seed,
                     "checkpoint": name,
-                    "sigma_trained": mean_sigma(actor),
+                    "sigma_trained": genome.mean_sigma(actor),
                     "individuals_mean": float(individuals.mean()),
                     "individuals_sd": float(individuals.std(ddof=1)),
                     "mean_network_mean": float(returns["normal"]["mean_network"].mean()),

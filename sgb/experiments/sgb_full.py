@@ -18,9 +18,9 @@ on where rho starts and on the number of steps (chapter 2): each record keeps, p
 the trained sigma averaged over its synapses (``layers``, ``sgb.moments.layer_statistics``)
 beside the accuracies.
 
-A cell is one variant, ratio and seed, trained by ``fig2.run_one`` under a lock
-(``sgb.runlock``), so several processes share the sweep; each finished cell is added to
-the results file at once (under that file's lock).
+A cell is one variant, ratio and seed, trained by ``sgb.supervised_sweep.run_one`` under
+a lock (``sgb.runlock``), so several processes share the sweep; each finished cell is
+added to the results file at once (under that file's lock).
 """
 
 import dataclasses
@@ -31,10 +31,10 @@ from tqdm.auto import tqdm
 from sgb import runlock, validation
 from sgb.classifiers import dense_sizes
 from sgb.data import load
-from sgb.experiments.fig2 import IMAGE_RATIOS, CompressionSweep, run_one, sweep_cells, sweep_summary
 from sgb.priors import GaussianPrior
 from sgb.recording import Recording, start
 from sgb.supervised import ClassifierConfig
+from sgb.supervised_sweep import IMAGE_RATIOS, CompressionSweep, run_one, sweep_cells, sweep_summary
 
 VARIANTS: dict[str, dict] = {
     "authors": {"kl_counting": "synapse", "rho_init": -7.0},

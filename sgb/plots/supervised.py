@@ -7,8 +7,8 @@ import matplotlib.ticker as mticker
 import numpy as np
 from matplotlib.axes import Axes
 
-from sgb.experiments.fig2 import summarise_compression
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
+from sgb.supervised_sweep import summarise_compression
 
 _LABELS = {"sgb": "SGB (sampled individuals)", "dgb": "DGB (g-net generated)"}
 _AXES = {
@@ -174,9 +174,9 @@ def plot_full_budgets(
 ) -> Axes:
     """Figure 2 at the authors' budgets: each SGB variant of ``sgb_full`` (the results of
     ``sgb.experiments.sgb_full``) and the finished full-budget DGB cells (``dgb_records``,
-    ``dgb_full.figure2_records``), mean innate test accuracy (%) +- SEM over seeds against
-    compression (ours); the cpu sweep's DGB and uncompressed network (``sweep``: Figure 2's
-    results) for reference."""
+    ``sgb.supervised_sweep.figure2_records``), mean innate test accuracy (%) +- SEM over
+    seeds against compression (ours); the cpu sweep's DGB and uncompressed network
+    (``sweep``: Figure 2's results) for reference."""
     ax = axes_or_new(ax, figsize=(6.4, 4.4))
     cells = list(sgb_full["cells"].values())
     for variant, (color, style, label) in _VARIANT_STYLE.items():

@@ -9,10 +9,12 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from sgb import stats
+from sgb.profiles import check_profile
 from sgb.rl import checkpoints
 from sgb.rl.normalizer import Normalizer
 from sgb.rl.population import population_returns
 from sgb.rl.ppo import PPOConfig
+from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name
 
 
 @dataclass(frozen=True)
@@ -123,3 +125,20 @@ def authors_protocol(
         "individuals_ci99": stats.mean_ci(individuals.mean(axis=1), 0.99),
         "mean_network_ci99": stats.mean_ci(mean_network, 0.99),
     }
+
+
+def population_config(profile: str) -> PopulationConfig:
+    """Figures 4 and 5 settings: the committed cpu checkpoint of the Ant with 64 cell types."""
+    check_profile(profile)
+    source = "paper" if profile == "paper" else "cpu"
+    checkpoint = str(CHECKPOINT_DIR / checkpoint_name("ant", 64, 0, source))
+    if profile == "smoke":
+        return PopulationConfig(
+            checkpoint,
+            n_individuals=8,
+            episodes=2,
+            episode_length=100,
+            sampled_episodes=2,
+            mean_network_episodes=16,
+        )
+    return PopulationConfig(checkpoint, episodes=3)

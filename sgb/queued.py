@@ -1,0 +1,27 @@
+"""An experiment's queued runs, as the background queue (``sgb.grid``) lists and lands
+them: each run's checkpoint, state file and chunks, and the experiment's results file."""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass(frozen=True)
+class QueuedRun:
+    """One run of a queued experiment: its name, its checkpoint (a ``.msgpack`` with its
+    ``.json`` sidecar), its state file while unfinished, its chunks, and, once finished,
+    its wall time (s)."""
+
+    label: str
+    checkpoint: Path
+    state: Path
+    chunks: int
+    finished: bool
+    wall_time_s: float | None = None
+
+
+@dataclass(frozen=True)
+class Queue:
+    """A queued experiment at one profile: its results file and its runs, in order."""
+
+    results: Path
+    runs: tuple[QueuedRun, ...]

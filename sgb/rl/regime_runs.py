@@ -1,0 +1,105 @@
+"""The runs of Figure 3C at the paper's budget under the authors' own training regime
+(``sgb.experiments.regime`` trains them): each run's cell types, seed and genome settings,
+their order, their PPO settings and checkpoint names, at each profile (``RUNS``)."""
+
+from dataclasses import dataclass, replace
+
+from sgb import validation
+from sgb.profiles import PROFILE_NAMES, check_profile
+from sgb.rl.ppo import PPOConfig
+from sgb.rl.regimes import authors_regime, with_settings
+from sgb.rl.sweep import ppo_settings
+
+GENOMES = ("authors", "authors_aliased")  # a Gaussian per type pair; their aliased layers
+SEEDS = tuple(range(3))
+INTERIM_EVAL_ENVS = 256  # environments of every evaluation but the last
+
+
+@dataclass(frozen=True)
+class RegimeRun:
+    """One run: its cell types (``None``: vanilla), seed and genome settings (``GENOMES``;
+    a vanilla run's is ``"authors"``, which it does not read)."""
+
+    cell_types: int | None
+    seed: int
+    genome: str = "authors"
+
+    def __post_init__(self) -> None:
+        validation.seed("seed", self.seed)
+        validation.choice("genome", self.genome, GENOMES)
+        if self.cell_types is not None:
+            validation.integer("cell types", self.cell_types)
+        elif self.genome != "authors":
+            raise ValueError("a vanilla run has no genome to alias")
+
+    @property
+    def label(self) -> str:
+        """``vanilla``, ``k64`` or ``k64_aliased``."""
+        if self.cell_types is None:
+            return "vanilla"
+        return f"k{self.cell_types}" + ("_aliased" if self.genome == "authors_aliased" else "")
+
+
+@dataclass(frozen=True)
+class RegimeRuns:
+    """The runs in the order they train, and the PPO settings they share before
+    ``run_config`` makes each one."""
+
+    runs: tuple[RegimeRun, ...]
+    ppo: PPOConfig
+
+    def __post_init__(self) -> None:
+        for r in self.runs:
+            validation.instance("run", r, RegimeRun)
+
+
+def grid(seeds: tuple[int, ...] = SEEDS) -> tuple[RegimeRun, ...]:
+    """Figure 3C's runs in the order they train (the docstring of ``sgb.experiments.regime``)."""
+    fall = [RegimeRun(k, s) for s in seeds for k in (None, 128, 16)]
+    shape = [RegimeRun(k, s) for k in (64, 32) for s in seeds]
+    aliased = [RegimeRun(16, s, "authors_aliased") for s in seeds]
+    return (*fall, *shape, *aliased)
+
+
+def regime_config(profile: str) -> RegimeRuns:
+    """The runs at ``profile``: at ``cpu`` and ``paper`` the whole grid (18 runs of
+    5 x 10^7 steps); smoke is a vanilla and a 16-type run of a few hundred steps."""
+    check_profile(profile)
+    regime = authors_regime(ppo_settings("ant", "cpu"))
+    base = replace(regime, interim_eval_individuals=INTERIM_EVAL_ENVS)
+    if profile == "smoke":
+        ppo = replace(
+            base,
+            total_steps=2 * 16 * 5 * 2,
+            num_envs=16,
+            unrolls_per_iteration=2,
+            num_minibatches=4,
+            num_epochs=1,
+            num_evals=2,
+            eval_individuals=4,
+            interim_eval_individuals=2,
+            episode_length=64,
+        )
+        return RegimeRuns((RegimeRun(None, 0), RegimeRun(16, 0)), ppo)
+    return RegimeRuns(grid(), base)
+
+
+def run_config(config: RegimeRuns, run: RegimeRun) -> PPOConfig:
+    """The settings of ``run``: the regime's network at its cell types, under the authors'
+    genome settings for an SGB, its type pairs aliased for an ``"authors_aliased"`` run."""
+    sgb = run.cell_types is not None
+    network = replace(config.ppo.network, cell_types=run.cell_types, bayesian_biases=sgb)
+    ppo = replace(config.ppo, network=network)
+    if not sgb:
+        return ppo
+    ppo = with_settings(ppo, "authors")
+    aliased = run.genome == "authors_aliased"
+    return replace(ppo, network=replace(ppo.network, aliased_pairs=aliased))
+
+
+def checkpoint_name(run: RegimeRun, profile: str) -> str:
+    """File name of ``run``'s checkpoint at ``profile``."""
+    return f"ant_regime_{run.label}_s{run.seed}_{profile}.msgpack"
+
+
+RUNS = {p: regime_config(p) for p in PROFILE_NAMES}

@@ -1,0 +1,88 @@
+"""An RL run's checkpoint: its name (``checkpoint_name``), where it lies (a results
+directory or the committed results, ``checkpoint_root``), training the run once
+(``trained_run``: resumable, and reused where the checkpoint holds its settings) and
+reading its record back (``finished_run``); the SEM over a summary's seeds."""
+
+from pathlib import Path
+
+import numpy as np
+
+from sgb import stats, validation
+from sgb.paths import committed_results
+from sgb.provenance import provenance
+from sgb.rl import checkpoints
+from sgb.rl.agent import NetworkConfig
+from sgb.rl.ppo import PPOConfig, train
+
+CHECKPOINT_DIR = Path("rl") / "checkpoints"
+
+
+def checkpoint_name(
+    env: str,
+    cell_types: int | None,
+    seed: int,
+    profile: str,
+    settings: str = "ours",
+    rho_init: float = NetworkConfig.rho_init,
+) -> str:
+    """File name of one run's checkpoint (Figure 3; ``rho_init``: the spread sweep)."""
+    label = "vanilla" if cell_types is None else f"k{cell_types}"
+    if settings != "ours":
+        label += f"_{settings}"
+    if rho_init != NetworkConfig.rho_init:
+        label += f"_rho{rho_init:g}"
+    return f"{env}_{label}_s{seed}_{profile}.msgpack"
+
+
+def checkpoint_root(out_dir: Path, checkpoint: str) -> Path:
+    """Where ``checkpoint`` lies: ``out_dir`` if it has it, else the committed results."""
+    return Path(out_dir) if (Path(out_dir) / checkpoint).exists() else committed_results()
+
+
+def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str, label: str) -> bool:
+    """Make sure ``checkpoint`` holds ``ppo`` trained with ``seed``: train it unless it
+    does (a killed run continues from its training state, ``*.state.npz``, kept beside
+    it); returns whether it trained now. ``label`` names the run in what it prints."""
+    if finished_run(checkpoint, ppo) is not None:
+        print(f"{label}: reused {checkpoint}", flush=True)
+        return False
+    state_file = checkpoint.with_suffix(".state.npz")
+    print(f"{label}: {'resumed' if state_file.exists() else 'training'}", flush=True)
+    result = train(ppo, seed=seed, state_file=state_file, label=label)
+    checkpoints.save(checkpoint, result, provenance(ppo, profile, [seed], result.wall_time_s))
+    state_file.unlink()
+    return True
+
+
+def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
+    """The record kept in ``checkpoint`` if it holds a run trained with ``ppo`` (``None``
+    if there is none, or it was trained with other settings; its intermediate evaluations
+    may have had another size, ``PPOConfig.trains_as``): its learning curve, its
+    scores (the last evaluation; the mean of the last two), its speed, wall time and
+    the commit and date it was trained at. A damaged checkpoint counts as none (it is said
+    so), so that the sweep trains the run again."""
+    if not checkpoint.exists():
+        return None
+    try:
+        config, _, _, meta = checkpoints.load(checkpoint)
+    except validation.CorruptFile as error:
+        print(f"{error}: it is trained again", flush=True)
+        return None
+    if not config.trains_as(ppo):
+        return None
+    returns = meta["eval_returns"]
+    trained = meta.get("provenance", {})
+    return {
+        "final_return": returns[-1],
+        "last_two_return": float(np.mean(returns[-2:])),
+        **{key: meta[key] for key in ("eval_steps", "eval_returns", "train_steps_per_s")},
+        "wall_time_s": meta["wall_time_s"],
+        "git_commit": trained.get("git_commit", "not recorded"),
+        "date": trained.get("date", "not recorded"),
+        "checkpoint": checkpoint.name,
+    }
+
+
+def seed_sem(values: np.ndarray) -> float:
+    """SEM over seeds of a 1-D array; NaN for a single seed."""
+    return float(stats.sem(values)) if values.size > 1 else float("nan")
