@@ -3,6 +3,7 @@
 rendered frames of the bodies (still, or walking with each tile labelled)."""
 
 import numpy as np
+import seaborn as sns
 
 from sgb import stats
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
@@ -82,7 +83,8 @@ def plot_regime(runs: list[dict], env: str = "ant", ax=None):
 
 
 def plot_pair(returns: dict, a: str, b: str, ax=None):
-    """Each individual's mean return on condition ``a`` vs ``b``, SEM over episodes as bars."""
+    """Each individual's mean return on condition ``a`` vs ``b``, SEM over episodes as bars,
+    with the least-squares line and its 95 % band (seaborn's bootstrap, seeded)."""
     ax = axes_or_new(ax)
     x, y = np.asarray(returns[a]["individuals"]), np.asarray(returns[b]["individuals"])
     ax.errorbar(
@@ -106,6 +108,16 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
             color=PALETTE["mean_network"],
             label="mean network",
         )
+    sns.regplot(
+        x=x.mean(1),
+        y=y.mean(1),
+        scatter=False,
+        ci=95,
+        seed=0,
+        ax=ax,
+        color=PALETTE["individuals"],
+        line_kws={"lw": 1, "label": "least-squares fit, 95 % band"},
+    )
     r = stats.pearson(x.mean(1), y.mean(1))
     ax.set_xlabel(f"return, {a.replace('_', ' ')}")
     ax.set_ylabel(f"return, {b.replace('_', ' ')}")
