@@ -401,7 +401,7 @@ def crossover_row(
     found = [r.verdict for r in sides]
     if verdicts.CONTRADICTED in found:
         verdict = verdicts.CONTRADICTED
-    elif found and all(v == verdicts.REPRODUCED for v in found):
+    elif found and all(v in verdicts.IN_DIRECTION for v in found):
         verdict = verdicts.REPRODUCED
     else:
         verdict = verdicts.INCONCLUSIVE

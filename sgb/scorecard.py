@@ -43,17 +43,26 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
 
 VERDICT_ORDER = (
     verdicts.REPRODUCED,
+    verdicts.SMALLER,
+    verdicts.LARGER,
     verdicts.CONTRADICTED,
     verdicts.INCONCLUSIVE,
     verdicts.NOT_TESTABLE,
 )
 BADGE_COLOURS = {  # background, text: dark text on light fills, readable in print too
     verdicts.REPRODUCED: ("#d6f0d6", "#14531a"),
+    verdicts.SMALLER: ("#e6f2cf", "#3b5410"),
+    verdicts.LARGER: ("#e6f2cf", "#3b5410"),
     verdicts.CONTRADICTED: ("#f7d4d4", "#7a1414"),
     verdicts.INCONCLUSIVE: ("#fbecc7", "#6b4a00"),
     verdicts.NOT_TESTABLE: ("#e4e4e4", "#333333"),
 }
-SHORT = {verdicts.INCONCLUSIVE: "inconclusive", verdicts.NOT_TESTABLE: "not testable"}
+SHORT = {
+    verdicts.SMALLER: "reproduced, smaller",
+    verdicts.LARGER: "reproduced, larger",
+    verdicts.INCONCLUSIVE: "inconclusive",
+    verdicts.NOT_TESTABLE: "not testable",
+}
 
 
 @dataclass(frozen=True)
@@ -175,16 +184,16 @@ def p_text(p: float) -> str:
 
 
 def holm_text(rows: list[Row]) -> str:
-    """Which reproduced rows keep p < 0.05 after Holm's correction within their family
-    (markdown)."""
+    """Which rows reproduced in direction keep p < 0.05 after Holm's correction within their
+    family (markdown)."""
     pairs = [(r, q) for r, q in zip(rows, holm_p(rows), strict=True)]
-    kept = [(r, q) for r, q in pairs if r.verdict == verdicts.REPRODUCED]
+    kept = [(r, q) for r, q in pairs if r.verdict in verdicts.IN_DIRECTION]
     survive = [r for r, q in kept if q < 1 - verdicts.LEVEL]
     names = "; ".join(f"{r.figure}, {r.setting}" for r in survive) or "none"
     return (
         f"Corrected for the many tests of each figure (Holm, within the figure, theorem or "
-        f"chapter), **{len(survive)} of the {len(kept)}** reproduced rows keep p < 0.05: "
-        f"{names}. Each row's raw and corrected p are in its details."
+        f"chapter), **{len(survive)} of the {len(kept)}** rows reproduced in direction keep "
+        f"p < 0.05: {names}. Each row's raw and corrected p are in its details."
     )
 
 

@@ -6,14 +6,16 @@ that the test would find (p < 0.05, two-sided) with 80 % power at this sample si
 
 The rule, for a claim whose paper effect is ``paper`` against a null ``null`` (no effect):
 
-- **reproduced**: the interval excludes the null, on the paper's side of it;
+- **reproduced**: the interval excludes the null, on the paper's side of it, and holds the
+  paper's effect (or the effect that stands in for it);
+- **reproduced in direction, smaller (larger) than the effect compared**: the interval
+  excludes the null on the paper's side, and the paper's effect (or its stand-in) on the
+  far (near) side: the direction holds, the size does not;
 - **contradicted**: otherwise, if the interval excludes the paper's effect;
 - **inconclusive at this budget**: neither; the budget that would decide is the sample
   size at which the detectable effect shrinks to the paper's (``units_to_decide``);
 - **not testable here**: no run here can test the claim (a reason is given instead).
 
-A claim reproduced in direction may still differ in size: ``paper_inside`` says whether
-the paper's effect lies inside the interval.
 """
 
 import math
@@ -27,10 +29,14 @@ from sgb import validation
 LEVEL = 0.95
 POWER = 0.8
 REPRODUCED = "reproduced"
+# smaller or larger than the effect the row compares: the paper's, or its stand-in
+SMALLER = "reproduced in direction, smaller than the effect compared"
+LARGER = "reproduced in direction, larger than the effect compared"
 CONTRADICTED = "contradicted"
 INCONCLUSIVE = "inconclusive at this budget"
 NOT_TESTABLE = "not testable here"
-VERDICTS = (REPRODUCED, CONTRADICTED, INCONCLUSIVE, NOT_TESTABLE)
+IN_DIRECTION = (REPRODUCED, SMALLER, LARGER)  # the paper's direction holds
+VERDICTS = (*IN_DIRECTION, CONTRADICTED, INCONCLUSIVE, NOT_TESTABLE)
 
 
 class _Fields(NamedTuple):
@@ -178,11 +184,14 @@ def _effect(test: Test, paper: float, null: float) -> tuple[float, float]:
 
 
 def verdict(test: Test, paper: float, null: float = 0.0) -> str:
-    """The rule of the module docstring: ``REPRODUCED``, ``CONTRADICTED`` or
-    ``INCONCLUSIVE``."""
+    """The rule of the module docstring: ``REPRODUCED``, ``SMALLER``, ``LARGER``,
+    ``CONTRADICTED`` or ``INCONCLUSIVE``."""
     paper, null = _effect(test, paper, null)
     if (paper > null and test.low > null) or (paper < null and test.high < null):
-        return REPRODUCED
+        if paper_inside(test, paper):
+            return REPRODUCED
+        beyond = test.low > paper if paper > null else test.high < paper
+        return LARGER if beyond else SMALLER
     if not test.low <= paper <= test.high:
         return CONTRADICTED
     return INCONCLUSIVE

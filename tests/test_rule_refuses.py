@@ -29,7 +29,7 @@ RETURNS = np.array([[1.0, 2.0, 3.0], [2.0, 3.0, 5.0], [0.0, 1.0, 1.0]])
 SPLIT = reliability.variance_split(RETURNS)
 CURVE_A = {10.0: [0.90, 0.91], 100.0: [0.80, 0.82], 700.0: [0.50, 0.52]}
 CURVE_B = {10.0: [0.85, 0.86], 100.0: [0.81, 0.83], 700.0: [0.70, 0.71]}
-STATES = (verdicts.REPRODUCED, verdicts.CONTRADICTED, verdicts.INCONCLUSIVE)
+STATES = (*verdicts.IN_DIRECTION, verdicts.CONTRADICTED, verdicts.INCONCLUSIVE)
 
 
 # the reproducers of the issue, and the degenerate designs --------------------------------
@@ -141,7 +141,7 @@ def test_a_test_is_checked_however_it_is_built():
     with pytest.raises(ValueError, match="high"):
         verdicts.Test._make([*WELCH[:3], INF, *WELCH[4:]])
     bootstrap = verdicts.Test("bootstrap", 60.0, 20.0, 500.0, NAN, NAN, NAN, 3)
-    assert math.isnan(bootstrap.p) and verdicts.verdict(bootstrap, 1.0) == verdicts.REPRODUCED
+    assert math.isnan(bootstrap.p) and verdicts.verdict(bootstrap, 1.0) == verdicts.LARGER
     with pytest.raises(TypeError, match="name"):
         verdicts.Test(None, *WELCH[1:])
 
@@ -184,7 +184,10 @@ def definition(test: verdicts.Test, paper: float, null: float) -> str:
     """The rule as the module docstring words it."""
     on_paper_side = test.low > null if paper > null else test.high < null
     if on_paper_side:
-        return verdicts.REPRODUCED
+        if test.low <= paper <= test.high:
+            return verdicts.REPRODUCED
+        nearer_null = test.high < paper if paper > null else test.low > paper
+        return verdicts.SMALLER if nearer_null else verdicts.LARGER
     if paper < test.low or paper > test.high:
         return verdicts.CONTRADICTED
     return verdicts.INCONCLUSIVE

@@ -49,6 +49,8 @@ def test_a_claims_headline_is_the_first_row_of_its_largest_budget():
     assert lines[1].headline.setting == "full, 200x" and len(lines[1].rows) == 3
     assert scorecard.counts(rows) == {
         verdicts.REPRODUCED: 2,
+        verdicts.SMALLER: 0,
+        verdicts.LARGER: 0,
         verdicts.CONTRADICTED: 1,
         verdicts.INCONCLUSIVE: 1,
         verdicts.NOT_TESTABLE: 0,
@@ -93,7 +95,8 @@ def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_
     rows = claims.regime_rows({"runs": runs}, 50_000_000)
     by_key = {r.key: r for r in rows}
     fall = by_key["fig3.fall_16.regime.ant"]
-    assert fall.verdict == verdicts.REPRODUCED and fall.test.low > 0.7
+    # a fall of about 0.87 of vanilla, measured to within 0.2, is larger than the 0.3 stand-in
+    assert fall.verdict == verdicts.LARGER and fall.test.low > 0.7
     assert "50M steps" in fall.budget
     assert claims.regime_rows({"runs": [r for r in runs if r["seed"] == 0]}, 50_000_000) == []
     no_second_16 = [r for r in runs if r["seed"] == 0 or r["cell_types"] != 16]
@@ -128,7 +131,7 @@ def test_holm_corrects_within_each_figure_and_the_page_names_the_survivors():
     np.testing.assert_allclose([adjusted[i] for i in figure3], expected)
     pairs = list(zip(rows, adjusted, strict=True))
     assert all(q >= r.test.p for r, q in pairs if r.test and not np.isnan(q))
-    reproduced = [q for r, q in pairs if r.verdict == verdicts.REPRODUCED]
+    reproduced = [q for r, q in pairs if r.verdict in verdicts.IN_DIRECTION]
     survive = sum(q < 0.05 for q in reproduced)
     assert f"**{survive} of the {len(reproduced)}**" in scorecard.holm_text(rows)
 

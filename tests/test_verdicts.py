@@ -57,7 +57,8 @@ def test_the_rule_finds_a_true_effect_rejects_a_null_and_flags_an_underpowered_d
         verdicts.verdict(verdicts.welch(rng.normal(0, 1, 10), rng.normal(0, 1, 10)), 1.0)
         for _ in range(1000)
     ]
-    assert calls.count(verdicts.REPRODUCED) / 1000 < 0.04  # one side of a 5 % test: 2.5 %
+    in_direction = sum(c in verdicts.IN_DIRECTION for c in calls)
+    assert in_direction / 1000 < 0.04  # one side of a 5 % test: 2.5 %
     big_null = verdicts.welch(rng.normal(0, 1, 400), rng.normal(0, 1, 400))
     assert verdicts.verdict(big_null, 1.0) == verdicts.CONTRADICTED
     # an effect of the paper's size measured with too few units: neither side excluded
@@ -68,6 +69,20 @@ def test_the_rule_finds_a_true_effect_rejects_a_null_and_flags_an_underpowered_d
     assert verdicts.verdict(
         verdicts.welch(rng.normal(-1, 0.5, 30), rng.normal(0, 0.5, 30)), -1.0
     ) == (verdicts.REPRODUCED)
+
+
+def test_the_rule_says_how_much_a_reproduced_direction_holds():
+    """With the paper's effect 1 (or -1): a true effect of 0.3 measured well enough is the
+    paper's direction at a smaller size; 2 a larger; 1 the paper's; mirrored below 0."""
+    rng = np.random.default_rng(5)
+
+    def measured(effect: float):
+        return verdicts.welch(rng.normal(effect, 0.5, 200), rng.normal(0.0, 0.5, 200))
+
+    for sign in (1.0, -1.0):
+        assert verdicts.verdict(measured(0.3 * sign), sign) == verdicts.SMALLER
+        assert verdicts.verdict(measured(2.0 * sign), sign) == verdicts.LARGER
+        assert verdicts.verdict(measured(1.0 * sign), sign) == verdicts.REPRODUCED
 
 
 def test_paired_and_one_sample_agree_with_scipy():
@@ -138,7 +153,7 @@ def test_figure3_verdicts_on_sweeps_with_known_falls():
         }["fig3.fall_16.ant"]
         for fall, seeds in ((0.5, 10), (0.0, 40), (0.3, 3))
     }
-    assert verdict[(0.5, 10)] == verdicts.REPRODUCED
+    assert verdict[(0.5, 10)] in verdicts.IN_DIRECTION
     assert verdict[(0.0, 40)] == verdicts.CONTRADICTED
     assert verdict[(0.3, 3)] in (verdicts.INCONCLUSIVE, verdicts.REPRODUCED)
 
@@ -193,8 +208,8 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
     results = populations.summarise({"genomes": genomes}, config)
     rows = {(r.key, r.setting.split(",")[1]): r for r in claims.populations_rows(results)}
     for who in (" our genome", " the authors' genome"):
-        assert rows["fig5.population_beats_mean", who].verdict == verdicts.REPRODUCED
-        assert rows["fig4e.r_legs", who].verdict == verdicts.REPRODUCED
+        assert rows["fig5.population_beats_mean", who].verdict in verdicts.IN_DIRECTION
+        assert rows["fig4e.r_legs", who].verdict in verdicts.IN_DIRECTION
 
 
 def test_regime_population_rows_tell_the_two_protocols_apart():
@@ -218,13 +233,13 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     stored = json.loads(json.dumps(_jsonable({"genomes": {"regime": genome}})))
     rows = claims.regime_population_rows(stored)
     fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
-    assert [r.verdict for r in fig5[:1]] == [verdicts.REPRODUCED]
+    assert fig5[0].verdict in verdicts.IN_DIRECTION
     assert fig5[0].test.estimate == pytest.approx(5.0, abs=0.5)  # % of the mean network
     one_sample, welch = fig5[1:]
     assert one_sample.test.p < 0.05 < welch.test.p
     assert welch.verdict == verdicts.INCONCLUSIVE
     (legs,) = [r for r in rows if r.key == "fig4e.r_legs"]
-    assert legs.verdict == verdicts.REPRODUCED and legs.test.low > 0.5
+    assert legs.verdict in verdicts.IN_DIRECTION and legs.test.low > 0.5
 
 
 def _crossing_curves(rng, seeds: int, noise: float) -> tuple[dict, dict, float]:
@@ -349,7 +364,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     near_200, near_700 = rows
     assert near_200.verdict == verdicts.CONTRADICTED
     assert near_200.test.estimate == pytest.approx(-10.0, abs=1.0) and near_200.test.n == 3
-    assert near_700.verdict == verdicts.REPRODUCED
+    assert near_700.verdict in verdicts.IN_DIRECTION
     assert near_700.test.estimate == pytest.approx(10.0, abs=1.0)
     # the curves cross where the 10-point lead changes hands, halfway in log(ratio)
     cross = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
@@ -384,7 +399,7 @@ def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
                     }
                 )
     helps, flat = claims.evolution_rows({"dataset": "digits", "records": records})
-    assert helps.verdict == verdicts.REPRODUCED
+    assert helps.verdict in verdicts.IN_DIRECTION
     assert helps.test.estimate == pytest.approx(5.0, abs=0.5)
     assert flat.verdict == verdicts.CONTRADICTED and flat.test.high < 1.0
 
@@ -423,7 +438,7 @@ def test_bet_hedging_rows_credit_diversified_individuals_and_not_clones_of_clone
     clones_p = [g["scores"]["clones"]["p_at_least"]["0.5"]["10"] for g in genomes[:3]]
     assert 0.25 < min(clones_p) < max(clones_p) < 0.5  # home, and the next condition by chance
     assert [r.key for r in wide] == ["ch6.hedging_geometric", "ch6.hedging_survival"]
-    assert [r.verdict for r in wide] == [verdicts.REPRODUCED] * 2
+    assert all(r.verdict in verdicts.IN_DIRECTION for r in wide) and len(wide) == 2
     assert wide[1].test.estimate > 0.5
     assert [r.verdict for r in narrow] == [verdicts.NOT_TESTABLE] * 2
     assert all("+0.00" in r.decide and r.setting.startswith("rho from -5") for r in narrow)
@@ -443,7 +458,7 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
             )
     selections = [{"genome": "g", "individual_means": [1000.0] * 100}]
     mean, random = claims.innate_start_rows({"runs": runs, "selections": selections})
-    assert mean.verdict == verdicts.REPRODUCED and mean.test.estimate == pytest.approx(
+    assert mean.verdict in verdicts.IN_DIRECTION and mean.test.estimate == pytest.approx(
         0.3, abs=0.03
     )
     assert mean.setting == "g, from its mean network"
@@ -463,7 +478,8 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
     area = rows["digits, from individual, over the epoch"].test
     assert area.estimate == pytest.approx(12.5, abs=0.5)
     assert rows["digits, from mean, over the epoch"].test.estimate == pytest.approx(7.5, abs=0.5)
-    assert rows["digits, from mean, over the epoch"].verdict == verdicts.REPRODUCED
+    # 7.5 points, measured to within a point or so, against a stand-in of 1 point
+    assert rows["digits, from mean, over the epoch"].verdict == verdicts.LARGER
     assert rows["digits, from individual, after one epoch"].verdict == verdicts.CONTRADICTED
 
 
