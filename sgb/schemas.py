@@ -582,6 +582,26 @@ BENCH_RL = _file(
         "sgb_64_types": Array(_BENCH_RUN),
     }
 )
+BENCH_REGIME = _file(  # per configuration (vanilla: null cell types), each phase's speed
+    {
+        "rows": Array(
+            {
+                "cell_types": Null(COUNT),
+                "env_steps_per_s": Each(POSITIVE),
+                "ratio_to_simulator": Each(POSITIVE),
+                "seconds": Each(Array(POSITIVE)),
+                "bound_env_steps_per_s": POSITIVE,
+                "iteration_over_bound": POSITIVE,
+                "bound_over_simulator": POSITIVE,
+                "sgd_flops_per_env_step": POSITIVE,
+                "update_gflops": POSITIVE,
+                "matmul_gflops": POSITIVE,
+                "run_hours": Each(POSITIVE),
+            }
+        ),
+        "table": Array(str),
+    }
+)
 BENCH_PARALLEL = _file(  # per workload: its speed alone and two at once
     Each(
         {
@@ -688,6 +708,7 @@ SCHEMAS = {
     "rl/innate_start_*_*.json": INNATE_START,
     "rl/bench_backends.json": BENCH_BACKENDS,
     "rl/bench_rl.json": BENCH_RL,
+    "rl/bench_regime.json": BENCH_REGIME,
 }
 
 
