@@ -23,12 +23,20 @@ import pandas as pd
 from scipy import stats as scipy_stats
 
 from sgb import stats, verdicts
-from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.reliability import (
+    between_sd_at,
+    between_sd_bound,
+    detectable_between_sd,
+    episodes_for,
+    episodes_to_detect,
+    variance_split,
+)
 from sgb.results import load as load_results
 from sgb.supervised_sweep import figure2_records
 
 # what each claim's test estimates, by key prefix
 EFFECTS = {
+    "title.variability": "SD between individuals' innate returns (% of the mean return)",
     "fig2.dgb_better_low": "DGB - SGB accuracy (points)",
     "fig2.sgb_better_high": "SGB - DGB accuracy (points)",
     "fig2.sgb_declines_slowly": "DGB's decline - SGB's (points)",
@@ -67,6 +75,9 @@ PAPER_BUDGETS = {
     ),
     "Figure 3": PaperBudget("5 x 10^7 steps, 5 seeds", 5e7, "steps"),
     "Figure 4": PaperBudget(
+        "a genome of 5 x 10^7 steps; 100 individuals x 10 episodes", 5e7, "the genome's steps"
+    ),
+    "Title": PaperBudget(  # measured on Figure 4E's genome and protocol
         "a genome of 5 x 10^7 steps; 100 individuals x 10 episodes", 5e7, "the genome's steps"
     ),
     "Figure 5": PaperBudget(
@@ -633,6 +644,52 @@ def episodes_to_decide(per_episode, effect: float) -> str:
     return f"{max(episodes, k)} episodes for each of {n} individuals"
 
 
+VARIABILITY_EFFECT = 1.0  # % of the return: the SD between individuals their plot data imply
+
+
+def variability_row(summary: dict, setting: str, key: str = "title.variability") -> Row | None:
+    """The title's claim on one genome: its individuals' innate returns on the normal body
+    differ. The effect is the SD between individuals in % of the mean return, its interval
+    from the ICC's (``between_sd_at``), its p the one-way F-test's, its detectable effect
+    that test's at 80 % power (``detectable_between_sd``); against about 1 % of the return,
+    what the authors' plot data imply. Where that cannot be decided, the episodes per
+    individual that would. ``None`` for a genome whose mean return is not positive."""
+    normal = summary["normal"]
+    split, mean = normal["variance_split"], normal["mean_return"]
+    if mean <= 0:
+        return None
+    n, k, within = split["n_individuals"], split["episodes"], split["within_var"]
+    percent = 100 / mean
+    low, high = (between_sd_at(icc, within) * percent for icc in split["icc_ci"])
+    test = verdicts.Test(
+        "one-way F, SD between individuals",
+        normal["between_sd"] * percent,
+        low,
+        high,
+        math.nan,
+        split["p"],
+        detectable_between_sd(n, k, math.sqrt(within)) * percent,
+        n,
+    )
+    row = judged(
+        key,
+        "Title",
+        "individuals of one genome differ in innate return (phenotypic variability)",
+        setting,
+        "phenotypic variability (no number)",
+        VARIABILITY_EFFECT,
+        "about 1 % of the return between individuals, as the authors' plot data imply "
+        "(an SD of 10-23 return units)",
+        test,
+        f"1 genome x {n} individuals x {k} episodes",
+        "individuals",
+    )
+    if row.verdict != verdicts.INCONCLUSIVE:
+        return row
+    needed = episodes_to_detect(n, math.sqrt(within), VARIABILITY_EFFECT / percent)
+    return replace(row, decide=f"{needed} episodes for each of {n} individuals")
+
+
 def figure5_rows(fig5: dict) -> list[Row]:
     """Figure 5: the population's mean return against its mean network's, our paired
     protocol and the authors' (individuals against the mean network's own sample, Welch).
@@ -732,6 +789,11 @@ def populations_rows(results: dict) -> list[Row]:
         bound = max(g["normal"].get("between_sd_bound_percent", 0.0) for g in done)
         attenuation = float(np.mean(np.sqrt(rels)))
         rows.append(_legs_row(label, r, attenuation, budget, _sd_below(bound)))
+    for genome in results["genomes"].values():
+        if "summary" in genome:
+            who = "our" if genome["settings"] == "ours" else "the authors'"
+            setting = f"ant, {who} genome, 64 types, seed {genome['training_seed']}"
+            rows += [r for r in [variability_row(genome["summary"], setting)] if r]
     return rows
 
 
@@ -837,6 +899,7 @@ def regime_population_rows(results: dict) -> list[Row]:
         bound = summary["normal"].get("between_sd_bound_percent", 0.0)
         legs = _stored_test(summary["legs"]["test"])
         rows.append(_legs_row(label, legs, attenuation, budget, _sd_below(bound)))
+        rows += [r for r in [variability_row(summary, label, "title.variability.regime")] if r]
     return rows
 
 
@@ -1108,8 +1171,10 @@ _READ_WHOLE = (  # file, its rows, and the sweep whose genomes it evaluates (if 
 
 
 def _genomes_at(rows: list[Row], steps: float | None) -> list[Row]:
-    """``rows`` of Figures 4 and 5, their budget the ``steps`` their genomes trained."""
-    return [replace(r, amount=steps) if r.family in ("Figure 4", "Figure 5") else r for r in rows]
+    """``rows`` of Figures 4 and 5 and of the title's variability, their budget the
+    ``steps`` their genomes trained."""
+    families = ("Title", "Figure 4", "Figure 5")
+    return [replace(r, amount=steps) if r.family in families else r for r in rows]
 
 
 def scorecard(results_dir: Path) -> list[Row]:

@@ -210,6 +210,25 @@ def figures4_5(card: Card) -> dict[str, str]:
     return texts | row_texts("fig5_ours", fig5[0]) | row_texts("fig5_theirs", fig5[1])
 
 
+def variability(card: Card) -> dict[str, str]:
+    """The title's claim (``title.variability*`` rows): the genome of the authors' regime
+    (``variability_regime``: estimate, interval and verdict) and, per genome settings at
+    the cpu sweep's budget, each genome's verdict (``variability_ours``,
+    ``variability_authors``); ``NOT_RUN`` where a setting has no row."""
+    texts = {}
+    regime = _row(card, "title.variability.regime")
+    found = row_texts("row", regime)
+    shown = f"{found['row_ours']} % of the return, {found['row_verdict']}"
+    texts["variability_regime"] = NOT_RUN if regime is None else shown
+    for who, settings in GENOMES:
+        rows = [r for r in card.get("title.variability", []) if f", {who}, " in r.setting]
+        texts[f"variability_{settings}"] = (
+            "; ".join(f"{r.setting.split(', ')[-1]}: {r.ours} %, **{r.verdict}**" for r in rows)
+            or NOT_RUN
+        )
+    return texts
+
+
 # Chapter 4 --------------------------------------------------------------------------------
 
 

@@ -117,3 +117,45 @@ def between_sd_bound(split: VarianceSplit) -> float:
     if icc_high <= 0:
         return 0.0
     return math.sqrt(icc_high / (1 - icc_high) * within)
+
+
+def between_sd_at(icc: float, within_var: float) -> float:
+    """The SD between individuals that a one-episode ``icc`` below 1 implies beside the
+    within-individual variance ``within_var``: sqrt(icc / (1 - icc) * within_var), 0 where
+    the ICC is 0 or below (same units as the returns)."""
+    icc, within = _icc("icc", icc), validation.non_negative("within_var", within_var)
+    if icc == 1:
+        raise ValueError("icc must be below 1: at 1 the SD between individuals is infinite")
+    return math.sqrt(max(icc, 0.0) / (1 - icc) * within)
+
+
+def detectable_between_sd(
+    n: int, k: int, within_sd: float, level: float = 0.95, power: float = 0.8
+) -> float:
+    """The smallest SD between individuals that the one-way F-test of N individuals x k
+    episodes finds (one-sided, at 1 - ``level``) with probability ``power``, at a
+    within-individual SD ``within_sd``: under sigma_b^2 = theta sigma_w^2, F / (1 + k theta)
+    is F(N - 1, N (k - 1)), so theta = (F_crit / F_(1 - power) - 1) / k."""
+    n, k = validation.integer("n", n, minimum=2), validation.integer("k", k, minimum=2)
+    within_sd = validation.non_negative("within_sd", within_sd)
+    level, power = validation.fraction("level", level), validation.fraction("power", power)
+    df1, df2 = n - 1, n * (k - 1)
+    ratio = scipy_stats.f.ppf(level, df1, df2) / scipy_stats.f.ppf(1 - power, df1, df2)
+    return within_sd * math.sqrt((ratio - 1) / k)
+
+
+def episodes_to_detect(n: int, within_sd: float, target_sd: float, most: int = 10**6) -> int:
+    """The fewest episodes per individual (at least 2) at which ``detectable_between_sd``
+    of N individuals falls to ``target_sd`` > 0 (it falls as episodes grow); ``most`` if
+    even that many do not reach it."""
+    target_sd = validation.positive("target_sd", target_sd)
+    if detectable_between_sd(n, most, within_sd) > target_sd:
+        return most
+    low, high = 2, most  # detectable at high <= target
+    while low < high:
+        mid = (low + high) // 2
+        if detectable_between_sd(n, mid, within_sd) <= target_sd:
+            high = mid
+        else:
+            low = mid + 1
+    return low

@@ -68,6 +68,7 @@ def chapter_texts(chapter: str, card: prose.Card) -> dict[str, str]:
         )
         | prose.figure3(*fig3, card)
         | prose.figures4_5(card)
+        | prose.variability(card)
         | rl_spread.spread_prose(spread)
     )
 
@@ -187,3 +188,14 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
     texts = prose.regime(both)
     assert texts["regime_level"] == f"{level.ours}, **{level.verdict}**"
     assert texts["regime_fall"].startswith("no row yet")
+
+
+def test_the_variability_texts_are_the_rows_of_each_setting():
+    """The regime's genome, then each setting's genomes, as the scorecard's rows say."""
+    card = claims.by_key(claims.scorecard(committed_results()))
+    texts = prose.variability(card)
+    (regime,) = card["title.variability.regime"]
+    assert texts["variability_regime"] == f"{regime.ours} % of the return, **{regime.verdict}**"
+    ours = [r for r in card["title.variability"] if ", our genome, " in r.setting]
+    assert texts["variability_ours"].count("**") == 2 * len(ours) > 0
+    assert set(prose.variability({}).values()) == {prose.NOT_RUN}

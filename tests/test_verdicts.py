@@ -10,7 +10,14 @@ from scipy import stats as scipy_stats
 from sgb import claims, stats, verdicts
 from sgb.paths import committed_results
 from sgb.provenance import _jsonable
-from sgb.reliability import episodes_for, projected_reliability, variance_split
+from sgb.reliability import (
+    between_sd_at,
+    detectable_between_sd,
+    episodes_for,
+    episodes_to_detect,
+    projected_reliability,
+    variance_split,
+)
 
 
 def test_welch_agrees_with_scipy_and_its_interval_covers_the_truth():
@@ -202,6 +209,7 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
             parts = {"normal": normal, "long_legs": long_legs, "mean_network": mean_net}
             genomes[f"{settings}{seed}"] = {
                 "settings": settings,
+                "training_seed": seed,
                 "parts": {k: {"returns": v.tolist()} for k, v in parts.items()},
             }
     config = populations.populations_config("cpu")
@@ -210,6 +218,8 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
     for who in (" our genome", " the authors' genome"):
         assert rows["fig5.population_beats_mean", who].verdict in verdicts.IN_DIRECTION
         assert rows["fig4e.r_legs", who].verdict in verdicts.IN_DIRECTION
+        # individuals 15 % of the return apart (SD 300 of 2000) differ by more than 1 %
+        assert rows["title.variability", who].verdict == verdicts.LARGER
 
 
 def test_regime_population_rows_tell_the_two_protocols_apart():
@@ -496,3 +506,50 @@ def test_holm_adjusts_a_known_family_and_keeps_the_familywise_error():
     raw = np.mean((families < 0.05).any(axis=1))
     holm = np.mean([min(verdicts.holm(list(f))) < 0.05 for f in families])
     assert raw > 0.3 and holm < 0.05 + 3 * math.sqrt(0.05 * 0.95 / 20_000)
+
+
+def test_the_detectable_between_sd_is_found_four_times_in_five():
+    """At the SD between individuals it names, the F-test (p < 0.05) rejects in about 80 %
+    of simulated populations (30 individuals x 5 episodes, within SD 1), and more episodes
+    lower it to any target."""
+    rng = np.random.default_rng(3)
+    n, k = 30, 5
+    sd = detectable_between_sd(n, k, 1.0)
+    found = 0
+    for _ in range(3000):
+        x = rng.normal(0, sd, (n, 1)) + rng.normal(0, 1.0, (n, k))
+        found += variance_split(x).p < 0.05
+    assert abs(found / 3000 - 0.8) < 0.03
+    k_needed = episodes_to_detect(n, 1.0, sd / 2)
+    assert detectable_between_sd(n, k_needed, 1.0) <= sd / 2
+    assert detectable_between_sd(n, k_needed - 1, 1.0) > sd / 2
+    assert between_sd_at(0.2, 4.0) == pytest.approx(1.0)
+    assert between_sd_at(-0.01, 4.0) == 0.0
+
+
+def _population_summary(rng, mean: float, between_sd: float, within_sd: float, k: int) -> dict:
+    """A populations summary (its normal body) of 100 simulated individuals x k episodes."""
+    x = mean + rng.normal(0, between_sd, (100, 1)) + rng.normal(0, within_sd, (100, k))
+    split = variance_split(x)
+    return {
+        "normal": {
+            "mean_return": float(x.mean()),
+            "variance_split": split._asdict(),
+            "between_sd": float(np.sqrt(split.between_var)),
+        }
+    }
+
+
+def test_the_variability_row_finds_individuals_that_differ_and_rules_out_clones():
+    """Against about 1 % of the return: individuals 5 % apart are a larger variability;
+    clones measured closely contradict it; clones measured with noisy episodes leave it
+    open, naming the episodes that would decide."""
+    rng = np.random.default_rng(11)
+    differ = claims.variability_row(_population_summary(rng, 1000, 50, 100, 32), "s")
+    assert differ.verdict == verdicts.LARGER and differ.test.low > 1.0
+    clones = claims.variability_row(_population_summary(rng, 1000, 0, 20, 64), "s")
+    assert clones.verdict == verdicts.CONTRADICTED and clones.test.high < 1.0
+    noisy = claims.variability_row(_population_summary(rng, 1000, 0, 1000, 4), "s")
+    assert noisy.verdict == verdicts.INCONCLUSIVE
+    episodes = int(noisy.decide.split()[0])
+    assert episodes > 4 and detectable_between_sd(100, episodes, 1000) <= 10.0 * 1.02
