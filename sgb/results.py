@@ -77,6 +77,25 @@ def fig3_summary(payload: Payload) -> list[dict]:
     return results.get("summary_last_two", results["summary"])
 
 
+def fig3_seeds(payload: Payload) -> list[dict]:
+    """Each SGB run of a Figure 3 sweep as a fraction of the mean vanilla return, scored as
+    ``fig3_summary`` scores it (the mean of the last two evaluations where the file has that
+    summary): settings, cell types, seed and fraction; their means are the summary's."""
+    results = payload["results"]
+    score = "last_two_return" if "summary_last_two" in results else "final_return"
+    vanilla = next(r["mean_return"] for r in fig3_summary(payload) if r["cell_types"] is None)
+    return [
+        {
+            "settings": r["settings"],
+            "cell_types": r["cell_types"],
+            "seed": r["seed"],
+            "fraction": r[score] / vanilla,
+        }
+        for r in results["runs"]
+        if r["cell_types"] is not None
+    ]
+
+
 FIG3_COLUMNS = {
     "env": "body",
     "settings": "genome",

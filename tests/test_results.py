@@ -222,3 +222,20 @@ def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():
         assert row["sigma, layer 0"] == pytest.approx(
             sum(c["layers"][0]["mean_sigma"] for c in mine) / len(mine)
         )
+
+
+def test_fig3_seeds_average_to_the_summary_of_their_sweep():
+    """Each setting's seeds, as fractions of vanilla, have the summary's fraction as mean."""
+    for env in ("ant", "halfcheetah"):
+        payload = raw(f"rl/fig3_{env}_cpu.json")
+        seeds = results.fig3_seeds(payload)
+        for row in results.fig3_summary(payload):
+            if row["cell_types"] is None:
+                continue
+            mine = [
+                s["fraction"]
+                for s in seeds
+                if (s["settings"], s["cell_types"]) == (row["settings"], row["cell_types"])
+            ]
+            assert len(mine) == row["n_seeds"]
+            assert sum(mine) / len(mine) == pytest.approx(row["fraction"])

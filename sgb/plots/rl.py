@@ -18,12 +18,25 @@ SETTINGS_STYLE = {
 }
 
 
-def plot_sweep(summary: list[dict], env: str, ax=None):
+def plot_sweep(summary: list[dict], env: str, seeds: list[dict] | None = None, ax=None):
     """Innate return as a fraction of vanilla PPO against the number of cell types (SEM
-    bars), one line per genome settings."""
+    bars; each point the mean innate return of an agent's individuals), one line per genome
+    settings, the legend under the axes; each seed a faint dot where ``seeds`` (rows of
+    ``sgb.results.fig3_seeds``) are given, spread a little sideways by seed."""
     ax = axes_or_new(ax)
     types = set()
     for settings, (color, marker, label) in SETTINGS_STYLE.items():
+        mine = [s for s in seeds or () if s["settings"] == settings]
+        if mine:
+            shift = 2.0 ** (0.04 * (np.array([s["seed"] for s in mine]) % 5 - 2))
+            ax.scatter(
+                np.array([s["cell_types"] for s in mine]) * shift,
+                [s["fraction"] for s in mine],
+                s=6,
+                alpha=0.35,
+                color=PALETTE[color],
+                linewidths=0,
+            )
         rows = sorted(
             (r for r in summary if r["cell_types"] is not None and r["settings"] == settings),
             key=lambda r: r["cell_types"],
@@ -41,7 +54,7 @@ def plot_sweep(summary: list[dict], env: str, ax=None):
             color=PALETTE[color],
             mfc="none" if len(rows) == 1 else PALETTE[color],
             ls="none" if len(rows) == 1 else "-",
-            label=f"{label} (innate, mean of individuals)",
+            label=label,
         )
     ax.axhline(1.0, color=PALETTE["baseline"], ls="--", label="vanilla PPO (width 128)")
     ax.set_xscale("log", base=2)
@@ -49,7 +62,7 @@ def plot_sweep(summary: list[dict], env: str, ax=None):
     ax.set_xlabel("cell types per hidden layer")
     ax.set_ylabel("return / vanilla return")
     ax.set_title(env)
-    ax.legend(loc="best", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=2, fontsize=8)
     return ax
 
 
