@@ -140,8 +140,9 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
 
 
 def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
-    """Figure 5, our protocol: sorted mean returns of the individuals against the mean
-    network's on the same initial states, with 99% CI bands and the paired t-test."""
+    """Figure 5, our protocol: the individuals' mean returns beside the mean network's on
+    the same initial states, as distributions with 99 % CIs of their means, and the paired
+    t-test."""
     ind = np.asarray(returns[condition]["individuals"]).mean(1)
     mean_net = np.asarray(returns[condition]["mean_network"]).mean(1)
     t = stats.paired_t(ind, mean_net)
@@ -150,9 +151,9 @@ def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
 
 
 def plot_authors_protocol(protocol: dict, ax=None):
-    """Figure 5, the authors' protocol (``sgb.rl.protocols.authors_protocol``): sorted
-    mean returns of the individuals (sampled actions) against the mean network's episodes,
-    with 99% CI bands and the one-sample t-test."""
+    """Figure 5, the authors' protocol (``sgb.rl.protocols.authors_protocol``): the
+    individuals' mean returns (sampled actions) beside the mean network's episodes, as
+    distributions with 99 % CIs of their means, and the one-sample t-test."""
     ind = np.asarray(protocol["individuals"]).mean(1)
     title = f"one-sample t({protocol['dof']}) = {protocol['t']:.1f}, p = {protocol['p']:.2g}"
     mean_net = np.asarray(protocol["mean_network"])
@@ -160,18 +161,56 @@ def plot_authors_protocol(protocol: dict, ax=None):
 
 
 def _population_and_mean_network(ind, mean_net, title: str, ylabel: str, ax):
+    """The individuals' mean returns and the mean network's returns as two distributions
+    side by side (a violin, every value a dot), each with its mean and 99 % CI in black
+    beside it."""
     ax = axes_or_new(ax)
-    rank = np.arange(1, ind.size + 1)
-    ax.plot(rank, np.sort(ind), ".", color=PALETTE["individuals"], label="individuals (sorted)")
-    for values, name in ((ind, "individuals"), (mean_net, "mean_network")):
+    groups = {"individuals": np.asarray(ind), "mean network": np.asarray(mean_net)}
+    frame = {
+        "who": [name for name, v in groups.items() for _ in v],
+        "return": np.concatenate(list(groups.values())),
+    }
+    colors = [PALETTE["individuals"], PALETTE["mean_network"]]
+    sns.violinplot(
+        frame,
+        x="who",
+        y="return",
+        hue="who",
+        palette=colors,
+        inner=None,
+        cut=0,
+        density_norm="width",
+        linewidth=0,
+        ax=ax,
+    )
+    for collection in ax.collections:
+        collection.set_alpha(0.3)
+    sns.stripplot(
+        frame,
+        x="who",
+        y="return",
+        hue="who",
+        palette=colors,
+        size=2,
+        alpha=0.6,
+        jitter=0.25,
+        legend=False,
+        ax=ax,
+    )
+    for i, values in enumerate(groups.values()):
         mean, low, high = stats.mean_ci(values, 0.99)
-        label = "population mean" if name == "individuals" else "mean network"
-        ax.axhline(mean, color=PALETTE[name], label=f"{label}, 99% CI")
-        ax.axhspan(low, high, color=PALETTE[name], alpha=0.25)
-    ax.set_xlabel("individual (rank)")
+        ax.errorbar(
+            i + 0.38,
+            mean,
+            yerr=[[mean - low], [high - mean]],
+            fmt="o",
+            ms=4,
+            capsize=3,
+            color="k",
+        )
+    ax.set_xlabel("")
     ax.set_ylabel(ylabel)
     ax.set_title(title, fontsize=9)
-    ax.legend(loc="lower right", fontsize=8)
     return ax
 
 
