@@ -48,14 +48,25 @@ def plot_accuracy_vs_compression(
     ax: Axes | None = None,
 ) -> Axes:
     """One panel: SGB and DGB mean innate test accuracy (%) +- SEM over seeds against
-    compression under ``convention`` (log axis), the SGB's mean network, the uncompressed
-    network (dotted) and the SGB/DGB crossovers (thin vertical lines)."""
+    compression under ``convention`` (log axis), each seed a faint dot (from ``records``
+    where the results hold them), the SGB's mean network, the uncompressed network (dotted)
+    and the SGB/DGB crossovers (thin vertical lines)."""
     ax = axes_or_new(ax, figsize=(5.2, 4.0))
     part = results[convention]
     summary = part["summary"]
+    x_of = "compression" if convention == "ours" else "compression_authors"
     for kind in ("dgb", "sgb"):
         if kind in summary:
             _band(ax, summary[kind], PALETTE[kind], _LABELS[kind])
+            seeds = [r for r in results.get("records", ()) if r["model"] == kind]
+            ax.scatter(
+                [r[x_of] for r in seeds],
+                [100 * r["accuracy"] for r in seeds],
+                s=6,
+                alpha=0.35,
+                color=PALETTE[kind],
+                linewidths=0,
+            )
     if mean_network and part.get("summary_mean_network", {}).get("sgb"):
         table = part["summary_mean_network"]["sgb"]
         _band(ax, table, PALETTE["mean_network"], "SGB mean network", ls="--")
