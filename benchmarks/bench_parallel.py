@@ -45,7 +45,7 @@ FIG2_WORKER = """
 import json, time
 from sgb.data import load
 from sgb import supervised_sweep
-sweep = supervised_sweep.SWEEPS["cpu"]["fashion-mnist"][0]
+sweep = supervised_sweep.SWEEPS["cpu"]["fashion-mnist"]["sweep"]
 data = load("fashion-mnist", seed=0)
 start = time.perf_counter()
 for setting in {settings}:

@@ -116,3 +116,21 @@ def test_fashion_mnist_main_setting_counts_the_kl_per_synapse():
     cells = sweep_cells(sweep, sizes)
     authors = [compression(k, sizes, s, 30, 10, "authors") for k, s, _ in cells if k != "dense"]
     assert min(authors) < 25 and max(authors) >= 1000
+
+
+def test_the_parallel_benchmarks_figure2_worker_trains_the_cpu_sweeps_cells():
+    """``benchmarks/bench_parallel.py``'s Figure 2 worker picks the Fashion-MNIST ``cpu``
+    sweep itself (its source run up to loading the data)."""
+    import importlib.util
+    from pathlib import Path
+
+    from sgb import supervised_sweep
+
+    path = Path(__file__).resolve().parent.parent / "benchmarks" / "bench_parallel.py"
+    spec = importlib.util.spec_from_file_location("bench_parallel", path)
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    source = bench.fig2_worker()
+    namespace: dict = {}
+    exec(source[: source.index("data = load(")], namespace)
+    assert namespace["sweep"] is supervised_sweep.SWEEPS["cpu"]["fashion-mnist"]["sweep"]
