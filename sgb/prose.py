@@ -92,7 +92,7 @@ def regime(payload: Payload) -> dict[str, str]:
     arms = [s for s in summary if s["cell_types"] is not None]
     return {
         "regime_vanilla": f"{vanilla['mean_return']:.0f}{spread} over {_seeds(n)}",
-        "regime_steps": f"{mine[0]['eval_steps'][-1]:.3g}",
+        "regime_steps": f"{mine[0]['eval_steps'][-1]:,}",
         "regime_vanilla_scale": f"{vanilla['mean_authors_scale']:.2f}",
         "regime_speed": f"{np.mean([r['train_steps_per_s'] for r in mine]):,.0f}",
         "regime_wall": f"{np.mean([r['wall_time_s'] for r in mine]) / 3600:.1f} h",

@@ -116,6 +116,7 @@ def test_the_texts_are_the_files_values():
     assert texts["regime_vanilla"].endswith(f"over {len(vanilla)} seed" + "s" * (len(vanilla) > 1))
     wall = np.mean([r["wall_time_s"] for r in vanilla])
     assert texts["regime_wall"] == f"{wall / 3600:.1f} h"
+    assert texts["regime_steps"] == f"{int(vanilla[0]['eval_steps'][-1]):,}"  # all digits
     bench = results.load("rl/bench_backends.json")["results"]["throughput"]
     ratio = bench["mjx"]["train_steps_per_s"] / bench["spring"]["train_steps_per_s"]
     assert prose.backends(results.load("rl/bench_backends.json"))["mjx_vs_spring"] == (
