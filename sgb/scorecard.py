@@ -16,6 +16,7 @@ from collections import Counter
 from dataclasses import dataclass
 
 from sgb import verdicts
+from sgb.book import p_text
 from sgb.claims import Row
 
 # Each claim's keys in ``sgb.claims``, the largest budget first; the claims in the paper's order.
@@ -177,17 +178,10 @@ def holm_p(rows: list[Row]) -> list[float]:
     return adjusted
 
 
-def p_text(p: float) -> str:
-    """A p-value as the page shows it: "< 0.001", or to two significant figures."""
-    if math.isnan(p):
-        return "-"
-    return "< 0.001" if p < 0.001 else f"{p:.2g}"
-
-
 def holm_text(rows: list[Row]) -> str:
     """Which rows reproduced in direction keep p < 0.05 after Holm's correction within their
     family (markdown)."""
-    pairs = [(r, q) for r, q in zip(rows, holm_p(rows), strict=True)]
+    pairs = list(zip(rows, holm_p(rows), strict=True))
     kept = [(r, q) for r, q in pairs if r.verdict in verdicts.IN_DIRECTION]
     survive = [r for r, q in kept if q < 1 - verdicts.LEVEL]
     names = "; ".join(f"{r.figure}, {r.setting}" for r in survive) or "none"

@@ -15,7 +15,6 @@ The rule, for a claim whose paper effect is ``paper`` against a null ``null`` (n
 - **inconclusive at this budget**: neither; the budget that would decide is the sample
   size at which the detectable effect shrinks to the paper's (``units_to_decide``);
 - **not testable here**: no run here can test the claim (a reason is given instead).
-
 """
 
 import math
