@@ -1,14 +1,17 @@
 """The paper's claims, each with the verdict its evidence here carries.
 
-``scorecard(results_dir)`` reads the committed results files and returns one ``Row`` per
-claim and setting: the paper's value, our estimate with its 95 % interval, the test, the
-effect detectable at 80 % power, the budget behind it and the verdict of
+``CLAIMS`` is the table of the claims (``Claim``: key, figure, statement, the paper's value,
+the effect tested, the effect compared and its basis, the unit that would decide); a row
+is ``judge(key, setting, test, budget)``. ``scorecard(results_dir)`` reads the committed
+results files and returns one ``Row`` per claim and setting: the paper's value, our
+estimate with its 95 % interval, the test, the effect detectable at 80 % power, the budget
+behind it and the verdict of
 ``sgb.verdicts.verdict``. Claims whose results file is missing are left out; claims no run
 here can test carry the reason instead of a test.
 
 Effects are signed so that the paper's side is positive where the paper states a
 direction. Where the paper gives a direction but no number, the effect used to judge a
-contradiction and to size the budget is stated in the row (``paper_effect_basis``).
+contradiction and to size the budget is stated in the row (``Row.basis``).
 """
 
 import functools
@@ -33,31 +36,6 @@ from sgb.reliability import (
 )
 from sgb.results import load as load_results
 from sgb.supervised_sweep import figure2_records
-
-# what each claim's test estimates, by key prefix
-EFFECTS = {
-    "title.variability": "SD between individuals' innate returns (% of the mean return)",
-    "fig2.dgb_better_low": "DGB - SGB accuracy (points)",
-    "fig2.sgb_better_high": "SGB - DGB accuracy (points)",
-    "fig2.sgb_declines_slowly": "DGB's decline - SGB's (points)",
-    "fig2.crossover": "compression (ours) where the curves first cross",
-    "fig2.full.sgb_better_high": "SGB - DGB accuracy (points)",
-    "fig2.full.crossover": "compression (ours) where the curves first cross",
-    "fig2.cifar": "-",
-    "fig3.level_128": "1 - fraction of vanilla at 128 types",
-    "fig3.fall_16": "fraction of vanilla, 128 - 16 types",
-    "ch5.typing_explains_fall": "fraction of vanilla, untyped - typed inputs (16 types)",
-    "fig4e.r_legs": "Pearson r",
-    "fig4f.r_terrain": "Pearson r",
-    "fig5.population_beats_mean": "individuals - mean network (return)",
-    "theorem.A.4": "settled sigma - sqrt(c / (H + c lambda))",
-    "ch6.evolution_stochastic_helps": "stochastic - deterministic genome, test accuracy (points)",
-    "ch6.hedging_geometric": "individuals - clones, geometric-mean fitness (mean network = 1)",
-    "ch6.hedging_survival": "individuals - clones, P(at least k of N survive)",
-    "ch6.innate_start_rl": "area under the learning curve / the fresh network's, - 1",
-    "ch6.innate_start_supervised": "test accuracy, start - fresh (points)",
-    "theorem": "Jensen gap E[L(w)] - L(mu)",
-}
 
 
 class PaperBudget(NamedTuple):
@@ -91,17 +69,292 @@ AT_BUDGET = 0.95
 NO_PAPER_BUDGET = PaperBudget("none: the paper proves or argues it, and runs nothing")
 
 
-@dataclass(frozen=True)
-class Row:
-    """One claim in one setting, and what the evidence says of it."""
+class Claim(NamedTuple):
+    """One statement a row judges: the paper's (or this book's, where the figure names a
+    chapter), its fixed parts.
+
+    ``paper_effect`` is the effect the verdict weighs the interval against, signed so that
+    the paper's side is positive, in the unit of ``effect``; ``None`` where a setting sets
+    it (each row passes its own, ``judge``). ``basis`` says what stands in for the paper's
+    number where it gives none ("" where the number is the paper's). ``unit``: what more of
+    would decide an inconclusive row (seeds, genomes, ...)."""
 
     key: str
     figure: str
-    claim: str
-    setting: str
+    statement: str
     paper: str
+    effect: str
     paper_effect: float | None
-    paper_effect_basis: str
+    basis: str
+    unit: str
+
+    @property
+    def family(self) -> str:
+        """Its family for the correction of many tests: its figure without the panel
+        letter ("Figure 3C" and "Figure 3D" are "Figure 3"), its theorem, or its chapter."""
+        found = re.match(r"Figure \d+", self.figure)
+        return found.group(0) if found else self.figure
+
+
+ONE_POINT = "the paper shows no number: 1 point, the smallest difference taken to matter"
+ONE_PERCENT = "about 1 % of the return, as the authors' plot data imply"
+_CROSS = "the curves cross: DGB better at low, SGB at high compression"
+_CROSS_EFFECT = "compression (ours) where the curves first cross"
+_FALL = "the return falls off near 16 types (128 against 16 types)"
+_VARIABILITY = (
+    "individuals of one genome differ in innate return (phenotypic variability)",
+    "phenotypic variability (no number)",
+    "SD between individuals' innate returns (% of the mean return)",
+    1.0,  # % of the return: the SD between individuals the authors' plot data imply
+    "about 1 % of the return between individuals, as the authors' plot data imply "
+    "(an SD of 10-23 return units)",
+    "individuals",
+)
+_PROPOSED = "(proposed in the Discussion, not measured)"
+_JENSEN = "Jensen gap E[L(w)] - L(mu)"
+
+
+def _figure3(env: str, infix: str) -> tuple[Claim, Claim]:
+    """Figure 3C (Ant) or 3D (HalfCheetah): the level at 128 types and the fall to 16."""
+    level = {"ant": 0.75, "halfcheetah": 0.45}[env]
+    figure = "Figure 3" + ("C" if env == "ant" else "D")
+    return (
+        Claim(
+            f"fig3.level_128.{infix}{env}",
+            figure,
+            "at 128 types the SGB falls short of vanilla, to about the paper's fraction",
+            f"{level:g} of vanilla",
+            "1 - fraction of vanilla at 128 types",
+            1 - level,
+            f"the paper's shortfall, 1 - {level:g}",
+            "seeds",
+        ),
+        Claim(
+            f"fig3.fall_16.{infix}{env}",
+            figure,
+            _FALL,
+            "a quick fall at 16 types",
+            "fraction of vanilla, 128 - 16 types",
+            0.3,
+            "the text gives no number: 0.3 of vanilla, our reading of 'falls off quickly'",
+            "seeds",
+        ),
+    )
+
+
+# The claims, in the order of the paper, then this book's: key -> claim.
+CLAIMS: dict[str, Claim] = {
+    c.key: c
+    for c in (
+        Claim("title.variability", "Title", *_VARIABILITY),
+        Claim("title.variability.regime", "Title", *_VARIABILITY),
+        Claim(
+            "fig2.dgb_better_low",
+            "Figure 2",
+            "the DGB is better at low compression",
+            "DGB above SGB",
+            "DGB - SGB accuracy (points)",
+            1.0,
+            ONE_POINT,
+            "seeds",
+        ),
+        Claim(
+            "fig2.sgb_better_high",
+            "Figure 2",
+            "the SGB is better at high compression",
+            "SGB above DGB",
+            "SGB - DGB accuracy (points)",
+            1.0,
+            ONE_POINT,
+            "seeds",
+        ),
+        Claim(
+            "fig2.sgb_declines_slowly",
+            "Figure 2",
+            "the SGB declines more slowly with compression than the DGB",
+            "SGB's decline smaller",
+            "DGB's decline - SGB's (points)",
+            1.0,
+            ONE_POINT,
+            "seeds",
+        ),
+        Claim(
+            "fig2.crossover",
+            "Figure 2",
+            _CROSS,
+            "a crossover",
+            _CROSS_EFFECT,
+            None,
+            "both sides of the crossover",
+            "",
+        ),
+        Claim(
+            "fig2.full.sgb_better_high",
+            "Figure 2",
+            "the SGB is better at high compression",
+            "SGB above DGB",
+            "SGB - DGB accuracy (points)",
+            1.0,
+            ONE_POINT,
+            "seeds",
+        ),
+        Claim(
+            "fig2.full.crossover",
+            "Figure 2",
+            _CROSS,
+            "a crossover",
+            _CROSS_EFFECT,
+            None,
+            "both sides of the crossover",
+            "",
+        ),
+        Claim(
+            "fig2.cifar",
+            "Figure 2D",
+            "the same shape on CIFAR-10",
+            "crossover on CIFAR-10",
+            "-",
+            None,
+            "",
+            "",
+        ),
+        *_figure3("ant", ""),
+        *_figure3("halfcheetah", ""),
+        *_figure3("ant", "regime."),
+        Claim(
+            "ch5.typing_explains_fall",
+            "Chapter 5",
+            "typing the observation entries causes the fall at 16 types",
+            "(the book's explanation, not the paper's)",
+            "fraction of vanilla, untyped - typed inputs (16 types)",
+            0.3,
+            "as large as the fall it would explain: 0.3 of vanilla",
+            "seeds",
+        ),
+        Claim(
+            "fig4e.r_legs",
+            "Figure 4E",
+            "individuals' returns on normal and long legs are positively correlated",
+            "r = 0.64",
+            "Pearson r",
+            None,
+            "",
+            "individuals",
+        ),
+        Claim(
+            "fig4f.r_terrain",
+            "Figure 4F",
+            "on rough ground and stairs the individuals' returns are uncorrelated",
+            "r = 0.065",
+            "Pearson r",
+            None,
+            "",
+            "",
+        ),
+        Claim(
+            "fig5.population_beats_mean",
+            "Figure 5",
+            "sampled individuals outperform the mean network",
+            "t(99) = 12",
+            "individuals - mean network (return)",
+            1.0,
+            ONE_PERCENT,
+            "individuals",
+        ),
+        Claim(
+            "theorem.A.1",
+            "Theorem A.1",
+            "on a convex loss the population is worse than its mean network (Jensen gap > 0)",
+            "gap > 0",
+            _JENSEN,
+            None,
+            "the second-order prediction, sigma^2 L''(mu) / 2",
+            "Monte Carlo units",
+        ),
+        Claim(
+            "theorem.A.3",
+            "Theorem A.3",
+            "on a concave loss the population is better than its mean network (Jensen gap < 0)",
+            "gap < 0",
+            _JENSEN,
+            None,
+            "the second-order prediction, sigma^2 L''(mu) / 2",
+            "Monte Carlo units",
+        ),
+        Claim(
+            "theorem.A.4",
+            "Theorem A.4",
+            "gradient descent shrinks sigma to 0 along positive curvature",
+            "sigma -> 0",
+            "settled sigma - sqrt(c / (H + c lambda))",
+            None,
+            "",
+            "steps",
+        ),
+        Claim(
+            "ch6.evolution_stochastic_helps",
+            "Chapter 6",
+            "stochastic development helps a genome that evolution shapes without gradients",
+            _PROPOSED,
+            "stochastic - deterministic genome, test accuracy (points)",
+            1.0,
+            "no number given: 1 point of accuracy",
+            "seeds",
+        ),
+        Claim(
+            "ch6.hedging_geometric",
+            "Chapter 6",
+            "variability raises a population's long-run fitness in a changing world",
+            "(the abstract's argument, not measured)",
+            "individuals - clones, geometric-mean fitness (mean network = 1)",
+            0.05,
+            "no number given: 5 % of the mean network's fitness at home",
+            "genomes",
+        ),
+        Claim(
+            "ch6.hedging_survival",
+            "Chapter 6",
+            "variability raises the chance that at least some individuals survive",
+            "(the abstract's argument, not measured)",
+            "individuals - clones, P(at least k of N survive)",
+            0.1,
+            "no number given: 0.1 of probability",
+            "genomes",
+        ),
+        Claim(
+            "ch6.innate_start_rl",
+            "Chapter 6",
+            "an innate individual is a good start for further learning",
+            _PROPOSED,
+            "area under the learning curve / the fresh network's, - 1",
+            0.1,
+            "no number given: 10 % more return over the budget than from scratch",
+            "seeds",
+        ),
+        Claim(
+            "ch6.innate_start_supervised",
+            "Chapter 6",
+            "an innate individual is a good start for further learning",
+            _PROPOSED,
+            "test accuracy, start - fresh (points)",
+            1.0,
+            "no number given: 1 point of accuracy",
+            "seeds",
+        ),
+    )
+}
+
+
+@dataclass(frozen=True)
+class Row:
+    """One claim in one setting, and what the evidence says of it: the test, the effect it
+    was weighed against (``paper_effect``, with its ``basis``: the claim's, or the one its
+    setting sets) and the verdict."""
+
+    claim: Claim
+    setting: str
+    paper_effect: float | None
+    basis: str
     test: verdicts.Test | None
     budget: str
     verdict: str
@@ -109,11 +362,30 @@ class Row:
     amount: float | None = None  # our budget in the unit of the paper's (PAPER_BUDGETS)
 
     @property
+    def key(self) -> str:
+        return self.claim.key
+
+    @property
+    def figure(self) -> str:
+        return self.claim.figure
+
+    @property
+    def statement(self) -> str:
+        return self.claim.statement
+
+    @property
+    def paper(self) -> str:
+        """The paper's value, in words."""
+        return self.claim.paper
+
+    @property
+    def effect(self) -> str:
+        """What the test estimates."""
+        return self.claim.effect
+
+    @property
     def family(self) -> str:
-        """The row's family: its figure without the panel letter ("Figure 3C" and "Figure
-        3D" are "Figure 3"), its theorem, or its chapter."""
-        found = re.match(r"Figure \d+", self.figure)
-        return found.group(0) if found else self.figure
+        return self.claim.family
 
     @property
     def paper_budget(self) -> PaperBudget:
@@ -141,17 +413,12 @@ class Row:
         return f"{self.budget} ({self.below_budget})" if self.below_budget else self.budget
 
     @property
-    def effect(self) -> str:
-        """What the test estimates."""
-        return next(v for k, v in EFFECTS.items() if self.key.startswith(k))
-
-    @property
     def compared(self) -> str:
         """The effect the verdict weighs the interval against, with where it comes from:
-        the paper's number, or what stands in for it (``paper_effect_basis``, in words)."""
+        the paper's number, or what stands in for it (``basis``, in words)."""
         if self.paper_effect is None:
             return "-"
-        basis = self.paper_effect_basis or "the paper's"
+        basis = self.basis or "the paper's"
         return f"{_num(self.paper_effect)} ({basis})"
 
     @property
@@ -172,45 +439,37 @@ def _num(x: float) -> str:
     return f"{x:.3g}"
 
 
-def judged(
+def judge(
     key: str,
-    figure: str,
-    claim: str,
     setting: str,
-    paper: str,
-    paper_effect: float,
-    basis: str,
     test: verdicts.Test,
     budget: str,
-    unit: str,
     amount: float | None = None,
+    paper_effect: float | None = None,
+    basis: str | None = None,
+    unit: str | None = None,
 ) -> Row:
-    """A row whose verdict the rule computes from ``test``; an inconclusive one names the
-    sample size (in ``unit``) at which the paper's effect becomes detectable. ``amount``:
-    the budget in the paper's unit for the row's figure (``PAPER_BUDGETS``)."""
-    verdict = verdicts.verdict(test, paper_effect)
+    """The row of the claim ``CLAIMS[key]`` in ``setting``, its verdict the rule's on
+    ``test``; an inconclusive one names the sample size (in the claim's unit) at which
+    the effect compared becomes detectable. That effect is the claim's, or
+    ``paper_effect`` (with its ``basis``) where the setting sets it, and the unit the
+    claim's or ``unit``. ``amount``: the budget in the paper's unit for the claim's figure
+    (``PAPER_BUDGETS``)."""
+    claim = CLAIMS[key]
+    effect = claim.paper_effect if paper_effect is None else paper_effect
+    if effect is None:
+        raise ValueError(f"the claim {key!r} has no effect of its own: pass paper_effect")
+    verdict = verdicts.verdict(test, effect)
     decide = ""
     if verdict == verdicts.INCONCLUSIVE:
-        decide = f"{verdicts.units_to_decide(test, paper_effect)} {unit}"
-    return Row(
-        key,
-        figure,
-        claim,
-        setting,
-        paper,
-        paper_effect,
-        basis,
-        test,
-        budget,
-        verdict,
-        decide,
-        amount,
-    )
+        decide = f"{verdicts.units_to_decide(test, effect)} {unit or claim.unit}"
+    chosen = claim.basis if basis is None else basis
+    return Row(claim, setting, effect, chosen, test, budget, verdict, decide, amount)
 
 
-def untestable(key: str, figure: str, claim: str, paper: str, reason: str) -> Row:
-    """A row no run here can test."""
-    return Row(key, figure, claim, "-", paper, None, "", None, "-", verdicts.NOT_TESTABLE, reason)
+def untestable(key: str, reason: str) -> Row:
+    """The row of a claim no run here can test, and why."""
+    return Row(CLAIMS[key], "-", None, "", None, "-", verdicts.NOT_TESTABLE, reason)
 
 
 # Figure 2 ---------------------------------------------------------------------------------
@@ -244,54 +503,35 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
     seeds = len(sgb[ratios_s[0]])
     budget = f"{seeds} seeds; the cpu sweep (SGB {CPU_EPOCHS} epochs, DGB {CPU_ROUNDS} rounds)"
     setting = f"{dataset}, our DGB layout"
-    basis = "the paper shows no number: 1 point, the smallest difference taken to matter"
     rows = [
-        judged(
+        judge(
             "fig2.dgb_better_low",
-            "Figure 2",
-            "the DGB is better at low compression",
             f"{setting}, about {min(low):.0f}x",
-            "DGB above SGB",
-            1.0,
-            basis,
             verdicts.welch(100 * dgb[ratios_d[0]], 100 * sgb[ratios_s[0]]),
             budget,
-            "seeds",
-            CPU_EPOCHS,
+            amount=CPU_EPOCHS,
         )
     ]
     for i in (-2, -1):
         rows.append(
-            judged(
+            judge(
                 "fig2.sgb_better_high",
-                "Figure 2",
-                "the SGB is better at high compression",
                 f"{setting}, about {ratios_s[i]:.0f}x",
-                "SGB above DGB",
-                1.0,
-                basis,
                 verdicts.welch(100 * sgb[ratios_s[i]], 100 * dgb[ratios_d[i]]),
                 budget,
-                "seeds",
-                CPU_EPOCHS,
+                amount=CPU_EPOCHS,
             )
         )
     # slow decline: each model's loss from the lowest ratio to the second-highest
     decline_s = 100 * (sgb[ratios_s[0]].mean() - sgb[ratios_s[-2]])
     decline_d = 100 * (dgb[ratios_d[0]].mean() - dgb[ratios_d[-2]])
     rows.append(
-        judged(
+        judge(
             "fig2.sgb_declines_slowly",
-            "Figure 2",
-            "the SGB declines more slowly with compression than the DGB",
             f"{setting}, {ratios_s[0]:.0f}x to {ratios_s[-2]:.0f}x",
-            "SGB's decline smaller",
-            1.0,
-            basis,
             verdicts.welch(decline_d, decline_s),
             budget,
-            "seeds",
-            CPU_EPOCHS,
+            amount=CPU_EPOCHS,
         )
     )
     return rows
@@ -374,19 +614,13 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
         for ratio_s, ratio_d in nearest_pairs(sgb, dgb):
             test = verdicts.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
             rows.append(
-                judged(
+                judge(
                     "fig2.full.sgb_better_high",
-                    "Figure 2",
-                    "the SGB is better at high compression",
                     f"{dataset}, the authors' DGB layout at {ratio_d:.0f}x (target "
                     f"{targets[ratio_d]:g}x), the SGB ({SGB_VARIANTS[variant]}) at {ratio_s:.0f}x",
-                    "SGB above DGB",
-                    1.0,
-                    "the paper shows no number: 1 point, the smallest difference taken to matter",
                     test,
                     f"{test.n} seeds; {FULL_BUDGET}",
-                    "seeds",
-                    FULL_EPOCHS,
+                    amount=FULL_EPOCHS,
                 )
             )
     return rows
@@ -430,14 +664,12 @@ def crossover_row(
             math.nan,
             seeds,
         )
+    claim = CLAIMS[key]
     return Row(
-        key,
-        "Figure 2",
-        "the curves cross: DGB better at low, SGB at high compression",
+        claim,
         f"{setting}; {crossing.share_crossing:.0%} of simulated curves cross",
-        "a crossover",
-        None,
-        "both sides of the crossover",
+        claim.paper_effect,
+        claim.basis,
         test,
         sides[0].budget if sides else "-",
         verdict,
@@ -508,7 +740,6 @@ def figure3_rows(
     vanilla = _returns(runs, "ours", None, score)
     scale = vanilla.mean() if vanilla.size else math.nan
     budget_of = f"{steps / 1e6:g}M steps, seeds: vanilla {vanilla.size}"
-    paper_level = {"ant": 0.75, "halfcheetah": 0.45}[env]
     rows = []
     for settings in dict.fromkeys(r["settings"] for r in runs if r["cell_types"] is not None):
         if settings not in settings_labels:
@@ -518,33 +749,21 @@ def figure3_rows(
         budget = f"{budget_of}, 128 types {top.size}, 16 types {bottom.size}"
         if min(top.size, vanilla.size) >= 2:  # the level compares these two arms
             rows.append(
-                judged(
+                judge(
                     f"fig3.level_128.{key_infix}{env}",
-                    "Figure 3" + ("C" if env == "ant" else "D"),
-                    "at 128 types the SGB falls short of vanilla, to about the paper's fraction",
                     label,
-                    f"{paper_level:g} of vanilla",
-                    1 - paper_level,
-                    f"the paper's shortfall, 1 - {paper_level:g}",
                     verdicts.welch(vanilla / scale, top / scale),
                     budget,
-                    "seeds",
                     steps,
                 )
             )
         if min(top.size, bottom.size) >= 2 and vanilla.size:  # the fall compares these two
             rows.append(
-                judged(
+                judge(
                     f"fig3.fall_16.{key_infix}{env}",
-                    "Figure 3" + ("C" if env == "ant" else "D"),
-                    "the return falls off near 16 types (128 against 16 types)",
                     label,
-                    "a quick fall at 16 types",
-                    0.3,
-                    "the text gives no number: 0.3 of vanilla, our reading of 'falls off quickly'",
                     verdicts.welch(top / scale, bottom / scale),
                     budget,
-                    "seeds",
                     steps,
                 )
             )
@@ -578,17 +797,11 @@ def typing_rows(results: dict, steps: int, score: str = "last_two_return") -> li
         if min(a.size, b.size) < 2:
             continue
         rows.append(
-            judged(
+            judge(
                 "ch5.typing_explains_fall",
-                "Chapter 5",
-                "typing the observation entries causes the fall at 16 types",
                 label,
-                "(the book's explanation, not the paper's)",
-                0.3,
-                "as large as the fall it would explain: 0.3 of vanilla",
                 verdicts.welch(a / vanilla, b / vanilla),
                 f"{steps / 1e6:g}M steps, seeds {a.size} and {b.size}",
-                "seeds",
             )
         )
     return rows
@@ -643,9 +856,6 @@ def episodes_to_decide(per_episode, effect: float) -> str:
     return f"{max(episodes, k)} episodes for each of {n} individuals"
 
 
-VARIABILITY_EFFECT = 1.0  # % of the return: the SD between individuals their plot data imply
-
-
 def variability_row(summary: dict, setting: str, key: str = "title.variability") -> Row | None:
     """The title's claim on one genome: its individuals' innate returns on the normal body
     differ. The effect is the SD between individuals in % of the mean return, its interval
@@ -670,22 +880,10 @@ def variability_row(summary: dict, setting: str, key: str = "title.variability")
         detectable_between_sd(n, k, math.sqrt(within)) * percent,
         n,
     )
-    row = judged(
-        key,
-        "Title",
-        "individuals of one genome differ in innate return (phenotypic variability)",
-        setting,
-        "phenotypic variability (no number)",
-        VARIABILITY_EFFECT,
-        "about 1 % of the return between individuals, as the authors' plot data imply "
-        "(an SD of 10-23 return units)",
-        test,
-        f"1 genome x {n} individuals x {k} episodes",
-        "individuals",
-    )
+    row = judge(key, setting, test, f"1 genome x {n} individuals x {k} episodes")
     if row.verdict != verdicts.INCONCLUSIVE:
         return row
-    needed = episodes_to_detect(n, math.sqrt(within), VARIABILITY_EFFECT / percent)
+    needed = episodes_to_detect(n, math.sqrt(within), row.paper_effect / percent)
     return replace(row, decide=f"{needed} episodes for each of {n} individuals")
 
 
@@ -697,17 +895,13 @@ def figure5_rows(fig5: dict) -> list[Row]:
     ind, mean_net = np.asarray(returns["individuals"]), np.asarray(returns["mean_network"])
     paired = verdicts.paired(ind.mean(axis=1), mean_net.mean(axis=1))
     effect = 0.01 * float(mean_net.mean())
-    ours = judged(
+    ours = judge(
         "fig5.population_beats_mean",
-        "Figure 5",
-        "sampled individuals outperform the mean network",
         f"ant, 64 types, ours: paired, {ind.shape[1]} episodes on shared initial states",
-        "t(99) = 12",
-        effect,
-        f"about 1 % of the return ({effect:.0f}), as the authors' plot data imply",
         paired,
         f"{ind.shape[0]} individuals x {ind.shape[1]} episodes",
-        "individuals",
+        paper_effect=effect,
+        basis=f"about 1 % of the return ({effect:.0f}), as the authors' plot data imply",
     )
     if ours.verdict == verdicts.INCONCLUSIVE:
         ours = replace(ours, decide=episodes_to_decide(ind - mean_net, effect))
@@ -715,19 +909,15 @@ def figure5_rows(fig5: dict) -> list[Row]:
     a_all = np.asarray(authors["individuals"])
     a_mean = np.asarray(authors["mean_network"])
     a_effect = 0.01 * float(a_mean.mean())
-    theirs = judged(
+    theirs = judge(
         "fig5.population_beats_mean",
-        "Figure 5",
-        "sampled individuals outperform the mean network",
         f"ant, 64 types, the authors' protocol: sampled actions, {a_all.shape[1]} episodes "
         f"each, mean network {a_mean.size} (Welch; their one-sample t = {authors['t']:.2f})",
-        "t(99) = 12",
-        a_effect,
-        f"about 1 % of the return ({a_effect:.0f})",
         verdicts.welch(a_all.mean(axis=1), a_mean),
         f"{a_all.shape[0]} individuals x {a_all.shape[1]} episodes, "
         f"{a_mean.size} mean-network episodes",
-        "individuals",
+        paper_effect=a_effect,
+        basis=f"about 1 % of the return ({a_effect:.0f})",
     )
     if theirs.verdict == verdicts.INCONCLUSIVE:
         theirs = replace(theirs, decide=episodes_to_decide(a_all, a_effect))
@@ -764,17 +954,12 @@ def populations_rows(results: dict) -> list[Row]:
         label = f"ant, {who} genome, 64 types, {n_genomes} genomes pooled (random effects)"
         diff = _pooled_test("pooled z", pooled["mean_network_percent"]["fixed_effect"], n_genomes)
         rows.append(
-            judged(
+            judge(
                 "fig5.population_beats_mean",
-                "Figure 5",
-                "sampled individuals outperform the mean network",
                 label + ", % of the mean network's return",
-                "t(99) = 12",
-                1.0,
-                "about 1 % of the return, as the authors' plot data imply",
                 diff,
                 budget,
-                "genomes",
+                unit="genomes",
             )
         )
         rels = [
@@ -800,28 +985,13 @@ def _legs_row(setting: str, r: verdicts.Test, attenuation: float, budget: str, d
     """Figure 4E's r against the paper's 0.64 as a measurement of ``attenuation`` (the root
     of the two bodies' reliabilities) sees it; with no reliability, an inconclusive row
     whose ``decide`` says what would tell the individuals apart."""
-    claim = "individuals' returns on normal and long legs are positively correlated"
     if attenuation > 0:
         paper = 0.64 * attenuation
         basis = f"0.64 as seen at these reliabilities: 0.64 x {attenuation:.2f} = {paper:.2f}"
-        return judged(
-            "fig4e.r_legs",
-            "Figure 4E",
-            claim,
-            setting,
-            "r = 0.64",
-            paper,
-            basis,
-            r,
-            budget,
-            "individuals",
-        )
+        return judge("fig4e.r_legs", setting, r, budget, paper_effect=paper, basis=basis)
     return Row(
-        "fig4e.r_legs",
-        "Figure 4E",
-        claim,
+        CLAIMS["fig4e.r_legs"],
         setting,
-        "r = 0.64",
         0.0,
         "0.64 attenuated by a reliability of 0: nothing observable",
         r,
@@ -878,17 +1048,11 @@ def regime_population_rows(results: dict) -> list[Row]:
             ]
         for protocol, test in tests:
             rows.append(
-                judged(
+                judge(
                     "fig5.population_beats_mean",
-                    "Figure 5",
-                    "sampled individuals outperform the mean network",
                     f"{label}, {protocol}, % of the mean network's return",
-                    "t(99) = 12",
-                    1.0,
-                    "about 1 % of the return, as the authors' plot data imply",
                     test,
                     budget,
-                    "individuals",
                 )
             )
         reliabilities = [
@@ -930,17 +1094,11 @@ def evolution_rows(results: dict) -> list[Row]:
         deterministic = [100 * by_seed[False][s]["mean_network"] for s in seeds]
         first = by_seed[True][seeds[0]]
         rows.append(
-            judged(
+            judge(
                 "ch6.evolution_stochastic_helps",
-                "Chapter 6",
-                "stochastic development helps a genome that evolution shapes without gradients",
                 f"{results['dataset']}, {k} hidden types ({first['compression']:.0f}x)",
-                "(proposed in the Discussion, not measured)",
-                1.0,
-                "no number given: 1 point of accuracy",
                 verdicts.paired(stochastic, deterministic),
                 f"{len(first['mean_fitness'])} generations, {len(seeds)} seeds",
-                "seeds",
             )
         )
     return rows
@@ -965,51 +1123,31 @@ def bet_hedging_rows(results: dict) -> list[Row]:
         geometric = [
             s["individuals"]["geometric_fitness"] - s["clones"]["geometric_fitness"] for s in scores
         ]
-        rows.append(
-            _across_genomes(
-                "ch6.hedging_geometric",
-                "variability raises a population's long-run fitness in a changing world",
-                setting,
-                0.05,
-                "no number given: 5 % of the mean network's fitness at home",
-                geometric,
-                budget,
-            )
-        )
+        rows.append(_across_genomes("ch6.hedging_geometric", setting, geometric, budget))
         survival = [
             s["individuals"]["p_at_least"][HEDGING_Q][HEDGING_K]
             - s["clones"]["p_at_least"][HEDGING_Q][HEDGING_K]
             for s in scores
         ]
-        rows.append(
-            _across_genomes(
-                "ch6.hedging_survival",
-                "variability raises the chance that at least some individuals survive",
-                setting,
-                0.1,
-                "no number given: 0.1 of probability",
-                survival,
-                budget,
-            )
-        )
+        rows.append(_across_genomes("ch6.hedging_survival", setting, survival, budget))
     return rows
 
 
-def _across_genomes(
-    key: str, claim: str, setting: str, effect: float, basis: str, differences, budget: str
-) -> Row:
+def _across_genomes(key: str, setting: str, differences, budget: str) -> Row:
     """A one-sample t over the genomes of individuals - clones; not testable where every
     genome gives the same difference (for a survival chance: both populations always, or
     never, had enough survivors)."""
-    paper = "(the abstract's argument, not measured)"
     if np.ptp(differences) == 0:
         reason = f"every genome gives the same difference, {differences[0]:+.2f}: no spread to test"
-        row = untestable(key, "Chapter 6", claim, paper, reason)
+        claim = CLAIMS[key]
         return replace(
-            row, setting=setting, paper_effect=effect, paper_effect_basis=basis, budget=budget
+            untestable(key, reason),
+            setting=setting,
+            paper_effect=claim.paper_effect,
+            basis=claim.basis,
+            budget=budget,
         )
-    test = verdicts.one_sample(differences, 0.0)
-    return judged(key, "Chapter 6", claim, setting, paper, effect, basis, test, budget, "genomes")
+    return judge(key, setting, verdicts.one_sample(differences, 0.0), budget)
 
 
 def innate_start_rows(results: dict) -> list[Row]:
@@ -1032,17 +1170,11 @@ def innate_start_rows(results: dict) -> list[Row]:
         if start == "fresh" or len(gains) < 2:
             continue
         rows.append(
-            judged(
+            judge(
                 "ch6.innate_start_rl",
-                "Chapter 6",
-                "an innate individual is a good start for further learning",
                 f"{genome}, from {starts[start]}",
-                "(proposed in the Discussion, not measured)",
-                0.1,
-                "no number given: 10 % more return over the budget than from scratch",
                 verdicts.one_sample(gains, 0.0),
                 f"{len(gains)} seeds of {group[0]['eval_steps'][-1] / 1e6:.1f}M steps",
-                "seeds",
             )
         )
     return rows
@@ -1070,17 +1202,11 @@ def innate_supervised_rows(results: dict) -> list[Row]:
         fresh = [score(r, "fresh", measure) for r in records]
         for start in ("individual", "mean"):
             rows.append(
-                judged(
+                judge(
                     "ch6.innate_start_supervised",
-                    "Chapter 6",
-                    "an innate individual is a good start for further learning",
                     f"{results['dataset']}, from {start}, {measure}",
-                    "(proposed in the Discussion, not measured)",
-                    1.0,
-                    "no number given: 1 point of accuracy",
                     verdicts.paired([score(r, start, measure) for r in records], fresh),
                     f"{len(records)} seeds, one epoch",
-                    "seeds",
                 )
             )
     return rows
@@ -1093,23 +1219,16 @@ def theorem_rows(theory: dict) -> list[Row]:
     """Theorems A.1 and A.3 on the 1-D toys: the sign of the Jensen gap E[L(w)] - L(mu)
     at the start, from its Monte Carlo estimate."""
     rows = []
-    for toy, sign, name in (("convex", 1, "A.1"), ("concave", -1, "A.3")):
+    for toy, name in (("convex", "A.1"), ("concave", "A.3")):
         t = theory["trajectories"][toy]
         test = verdicts.estimate_test("Monte Carlo z", t["gap"][0], t["gap_stderr"][0], 1)
         rows.append(
-            judged(
+            judge(
                 f"theorem.{name}",
-                f"Theorem {name}",
-                f"on a {toy} loss the population is {'worse' if sign > 0 else 'better'} "
-                "than its mean network (Jensen gap "
-                f"{'> 0' if sign > 0 else '< 0'})",
                 f"1-D {toy} toy",
-                f"gap {'> 0' if sign > 0 else '< 0'}",
-                float(t["prediction"][0]),
-                "the second-order prediction, sigma^2 L''(mu) / 2",
                 test,
                 "Monte Carlo draws of the toy (see chapter 3)",
-                "Monte Carlo units",
+                paper_effect=float(t["prediction"][0]),
             )
         )
     if "elbo_toy" in theory:
@@ -1137,17 +1256,13 @@ def sigma_law_rows(toy: dict) -> list[Row]:
             continue
         test = verdicts.estimate_test("stationary spread", settled - predicted, sd, 1)
         rows.append(
-            judged(
+            judge(
                 "theorem.A.4",
-                "Theorem A.4",
-                "gradient descent shrinks sigma to 0 along positive curvature",
                 f"1-D convex toy, KL weight {c:g}, sigma = softplus(rho)",
-                "sigma -> 0",
-                -float(predicted),
-                f"sigma at 0: minus the fixed point with the entropy term ({predicted:.3f})",
                 test,
                 f"{int(toy['steps'][-1])} gradient steps",
-                "steps",
+                paper_effect=-float(predicted),
+                basis=f"sigma at 0: minus the fixed point with the entropy term ({predicted:.3f})",
             )
         )
     return rows
@@ -1221,17 +1336,11 @@ def scorecard(results_dir: Path) -> list[Row]:
     rows += [
         untestable(
             "fig4f.r_terrain",
-            "Figure 4F",
-            "on rough ground and stairs the individuals' returns are uncorrelated",
-            "r = 0.065",
             "ANYmal on terrain needs Isaac Gym and a GPU; Brax's spring backend has no "
             "height fields (chapter 5 measures two physical niches instead)",
         ),
         untestable(
             "fig2.cifar",
-            "Figure 2D",
-            "the same shape on CIFAR-10",
-            "crossover on CIFAR-10",
             "CIFAR-10 needs the internet to download; its loader is tested on written files",
         ),
     ]
@@ -1242,11 +1351,8 @@ def untrained_row(env: str, steps: int) -> Row:
     """Figure 3 on a body whose vanilla agent learned nothing in ``steps``: no fraction of
     vanilla means anything there."""
     return Row(
-        f"fig3.fall_16.{env}",
-        "Figure 3D" if env == "halfcheetah" else "Figure 3C",
-        "the return falls off near 16 types (128 against 16 types)",
+        CLAIMS[f"fig3.fall_16.{env}"],
         f"{env}, {steps:,} steps",
-        "a quick fall at 16 types",
         None,
         "",
         None,
@@ -1276,7 +1382,7 @@ def table(rows: list[Row]) -> pd.DataFrame:
     return pd.DataFrame(
         {
             "figure": r.figure,
-            "claim": r.claim,
+            "claim": r.statement,
             "setting": r.setting,
             "paper": r.paper,
             "effect tested": r.effect,

@@ -314,8 +314,9 @@ def main(argv: list[str], reproduce: Callable[[list[str]], int]) -> int:
             for path in landed.runs + landed.results:
                 print(f"landed {path.relative_to(REPOSITORY)}")
             print(
-                f"{len(entered)} results files entered into the manifest; commit what landed: "
-                "git add results && git commit"
+                f"{len(entered)} results files entered into the manifest; commit what landed, "
+                "with the scorecard and texts it moves: python tests/snapshot.py && "
+                "git add results tests/data && git commit"
             )
     except (ValueError, RuntimeError) as error:
         print(f"error: {error}", file=sys.stderr)

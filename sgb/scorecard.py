@@ -19,7 +19,8 @@ from sgb import verdicts
 from sgb.book import p_text
 from sgb.claims import Row
 
-# Each claim's keys in ``sgb.claims``, the largest budget first; the claims in the paper's order.
+# Each claim's keys in ``sgb.claims.CLAIMS``, the largest budget first; the claims in the
+# paper's order.
 CLAIMS: tuple[tuple[str, ...], ...] = (
     ("title.variability.regime", "title.variability"),
     ("fig2.dgb_better_low",),
@@ -27,8 +28,8 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("fig2.sgb_declines_slowly",),
     ("fig2.full.crossover", "fig2.crossover"),
     ("fig2.cifar",),
-    ("fig3.level_128.regime", "fig3.level_128"),
-    ("fig3.fall_16.regime", "fig3.fall_16"),
+    ("fig3.level_128.regime.ant", "fig3.level_128.ant", "fig3.level_128.halfcheetah"),
+    ("fig3.fall_16.regime.ant", "fig3.fall_16.ant", "fig3.fall_16.halfcheetah"),
     ("ch5.typing_explains_fall",),
     ("fig4e.r_legs",),
     ("fig4f.r_terrain",),
@@ -87,16 +88,11 @@ def counts(rows: list[Row]) -> dict[str, int]:
 
 
 def _claim_of(key: str) -> int:
-    """The index in ``CLAIMS`` of the claim row ``key`` tests (its longest matching key)."""
-    matches = [
-        (len(prefix), i)
-        for i, prefixes in enumerate(CLAIMS)
-        for prefix in prefixes
-        if key.startswith(prefix)
-    ]
-    if not matches:
+    """The index in ``CLAIMS`` of the claim whose keys hold ``key``."""
+    found = [i for i, keys in enumerate(CLAIMS) if key in keys]
+    if not found:
         raise ValueError(f"scorecard row {key!r} belongs to no claim of sgb.scorecard.CLAIMS")
-    return max(matches)[1]
+    return found[0]
 
 
 def claim_lines(rows: list[Row]) -> list[ClaimLine]:
@@ -108,7 +104,7 @@ def claim_lines(rows: list[Row]) -> list[ClaimLine]:
     lines = []
     for i, pairs in sorted(grouped.items()):
         mine = [r for r, _ in pairs]
-        headline = next(r for p in CLAIMS[i] for r in mine if r.key.startswith(p))
+        headline = next(r for key in CLAIMS[i] for r in mine if r.key == key)
         lines.append(ClaimLine(headline, tuple(mine), tuple(q for _, q in pairs)))
     return lines
 
@@ -151,7 +147,7 @@ def ours_text(r: Row) -> str:
 def paper_text(r: Row) -> str:
     """The paper's value of row ``r`` in our unit where the paper gives one, else its words
     (where it states a direction only, the effect that stands in for it is not its value)."""
-    if r.paper_effect is None or r.test is None or r.paper_effect_basis:
+    if r.paper_effect is None or r.test is None or r.basis:
         return r.paper
     return number_text(r.paper_effect, _decimals(r.test.high - r.test.low))
 
@@ -273,7 +269,7 @@ def html(rows: list[Row]) -> str:
         unit = "" if r.test is None else f'<br><small style="color:#555">{_e(_unit(r))}</small>'
         cells = (
             _e(r.figure),
-            f'{_e(r.claim)}<br><small style="color:#555">{_e(r.setting)}</small>',
+            f'{_e(r.statement)}<br><small style="color:#555">{_e(r.setting)}</small>',
             f"{_e(ours_text(r))}{unit}",
             _e(paper_text(r)),
             badge(r.verdict) + _below(r),

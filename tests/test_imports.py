@@ -27,7 +27,8 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "sgb"
 README = PACKAGE.parent / "README.md"
 EXPERIMENTS = "sgb.experiments"
-TOP = frozenset({"sgb.__main__", "sgb.grid"})
+# the modules that gather the experiments: the command line, the queue, the chapters' texts
+TOP = frozenset({"sgb.__main__", "sgb.grid", "sgb.chapters"})
 
 
 def module_name(path: Path) -> str:

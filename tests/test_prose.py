@@ -8,17 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sgb import book, claims, prose, results
-from sgb.experiments import rl_spread
+from sgb import book, chapters, claims, prose, results
 from sgb.paths import committed_results
 
 BOOK = Path(__file__).resolve().parent.parent / "book"
-# names a chapter glues from what it computes while it runs, not from results files
-COMPUTED = {
-    "04_dgb_vs_sgb": {"nominal_30_real", "nominal_1500_real"},
-    "05_brax_populations": {"walk_sigma_narrow", "walk_sigma_wide", "walk_steps"},
-    "06_beyond_the_paper": set(),
-}
 
 
 def prose_names(chapter: str) -> set[str]:
@@ -33,52 +26,24 @@ def card() -> prose.Card:
     return claims.by_key(claims.scorecard(committed_results()))
 
 
-def chapter_texts(chapter: str, card: prose.Card) -> dict[str, str]:
-    """What the chapter's cells glue from the committed results, the calls they make."""
-    if chapter == "04_dgb_vs_sgb":
-        fashion = results.load("fig2_fashion-mnist_cpu.json")["results"]
-        dense = fashion["ours"]["summary"]["dense"]["mean"][0]
-        budget = results.load("dgb_budget_fashion-mnist_cpu.json")["results"]
-        gap = results.load("mean_gap_fashion-mnist_cpu.json")["results"]
-        full = results.load("sgb_full_fashion-mnist_cpu.json")
-        return (
-            prose.figure2(fashion, card)
-            | prose.mean_gap(gap)
-            | prose.dgb_budget(budget, dense)
-            | prose.sgb_full(full)
-            | prose.figure2_full(results.load("dgb_full_fashion-mnist_cpu.json"), card)
-        )
-    if chapter == "06_beyond_the_paper":
-        return (
-            prose.evolution(results.load("evolution_digits_cpu.json"))
-            | prose.bet_hedging(results.load("rl/bet_hedging_ant_cpu.json", missing_ok=True))
-            | prose.innate_start(
-                results.load("rl/innate_start_ant_cpu.json", missing_ok=True),
-                results.load("innate_start_supervised_fashion-mnist_cpu.json", missing_ok=True),
-            )
-        )
-    fig3 = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
-    spread = results.load("rl/spread_ant_cpu.json")["results"]["runs"]
-    return (
-        prose.backends(results.load("rl/bench_backends.json"))
-        | prose.regime(results.load("rl/regime_ant_cpu.json"))
-        | prose.populations(results.load("rl/populations_ant_cpu.json"))
-        | prose.regime_populations(
-            results.load("rl/regime_populations_ant_cpu.json", missing_ok=True)
-        )
-        | prose.figure3(*fig3, card)
-        | prose.figures4_5(card)
-        | prose.variability(card)
-        | rl_spread.spread_prose(spread)
-    )
-
-
-@pytest.mark.parametrize("chapter", sorted(COMPUTED))
+@pytest.mark.parametrize("chapter", sorted(chapters.CHAPTERS))
 def test_each_name_of_the_prose_is_glued_from_results_or_computed(chapter, card):
-    texts = chapter_texts(chapter, card)
-    assert sorted(prose_names(chapter) - COMPUTED[chapter] - set(texts)) == []
-    assert not COMPUTED[chapter] & set(texts)
+    texts = chapters.texts(chapter, card=card)
+    computed = chapters.COMPUTED[chapter]
+    assert sorted(prose_names(chapter) - computed - set(texts)) == []
+    assert not computed & set(texts)
     assert all(isinstance(t, str) and t for t in texts.values())
+
+
+def test_each_chapter_glues_its_texts_in_one_call():
+    """The chapters of ``chapters.CHAPTERS`` glue their texts from it, and no other
+    chapter glues a text of ``sgb.prose``."""
+    for path in sorted(BOOK.glob("*.ipynb")):
+        notebook = json.loads(path.read_text())
+        code = "".join("".join(c["source"]) for c in notebook["cells"] if c["cell_type"] == "code")
+        call = f'book.glue_all(chapters.texts("{path.stem}", RESULTS))'
+        assert code.count(call) == (path.stem in chapters.CHAPTERS), path.name
+        assert "glue_all(prose." not in code, path.name
 
 
 def test_row_texts_read_the_scorecard_row(card):

@@ -14,7 +14,8 @@ from sgb.paths import committed_results
 
 def _row(key: str, verdict: str, estimate: float = 1.0, setting: str = "s") -> claims.Row:
     test = verdicts.estimate_test("Monte Carlo z", estimate, 0.5, 10)
-    return claims.Row(key, "Figure 2", "a claim", setting, "p", 1.0, "", test, "b", verdict, "")
+    claim = claims.CLAIMS.get(key) or claims.Claim(key, "Figure 9", "a claim", "p", "e", 1, "", "")
+    return claims.Row(claim, setting, 1.0, "", test, "b", verdict, "")
 
 
 def test_every_committed_row_lands_under_one_claim_and_the_counts_add_up():
@@ -111,9 +112,9 @@ def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
     """A row whose effect stands in for a direction says so in words beside the number; a
     row with the paper's own number says it is the paper's; the page shows both."""
     rows = claims.scorecard(committed_results())
-    stand_in = next(r for r in rows if r.paper_effect_basis and r.paper_effect is not None)
-    assert stand_in.compared.endswith(f"({stand_in.paper_effect_basis})")
-    own = dataclasses.replace(stand_in, paper_effect=0.25, paper_effect_basis="")
+    stand_in = next(r for r in rows if r.basis and r.paper_effect is not None)
+    assert stand_in.compared.endswith(f"({stand_in.basis})")
+    own = dataclasses.replace(stand_in, paper_effect=0.25, basis="")
     assert own.compared == "0.25 (the paper's)"
     page = scorecard.html(rows)
     assert "effect compared" in page
@@ -153,3 +154,19 @@ def test_a_verdict_below_the_papers_budget_says_how_far_below():
     below = scorecard.html_escape.escape(fig3.below_budget)
     assert f'<br><small style="color:#555">{below}</small>' in page
     assert scorecard.html_escape.escape(fig3.paper_budget.text) in page
+
+
+def test_the_page_places_every_claim_of_the_table_once():
+    """Every claim of ``claims.CLAIMS`` is on one line of the page, and a line names no
+    claim the table lacks; a claim whose effect each setting sets is refused without it."""
+    placed = [key for keys in scorecard.CLAIMS for key in keys]
+    assert sorted(placed) == sorted(claims.CLAIMS)
+    test = verdicts.estimate_test("Monte Carlo z", 1.0, 0.5, 10)
+    with pytest.raises(ValueError, match="fig4e.r_legs"):
+        claims.judge("fig4e.r_legs", "s", test, "b")
+    row = claims.judge("fig4e.r_legs", "s", test, "b", paper_effect=0.5, basis="half")
+    assert (row.paper_effect, row.basis, row.statement) == (
+        0.5,
+        "half",
+        claims.CLAIMS["fig4e.r_legs"].statement,
+    )
