@@ -355,7 +355,7 @@ class Row:
     setting: str
     paper_effect: float | None
     basis: str
-    test: verdicts.Test | None
+    test: stats.Test | None
     budget: str
     verdict: str
     decide: str
@@ -442,7 +442,7 @@ def _num(x: float) -> str:
 def judge(
     key: str,
     setting: str,
-    test: verdicts.Test,
+    test: stats.Test,
     budget: str,
     amount: float | None = None,
     paper_effect: float | None = None,
@@ -507,7 +507,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
         judge(
             "fig2.dgb_better_low",
             f"{setting}, about {min(low):.0f}x",
-            verdicts.welch(100 * dgb[ratios_d[0]], 100 * sgb[ratios_s[0]]),
+            stats.welch(100 * dgb[ratios_d[0]], 100 * sgb[ratios_s[0]]),
             budget,
             amount=CPU_EPOCHS,
         )
@@ -517,7 +517,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
             judge(
                 "fig2.sgb_better_high",
                 f"{setting}, about {ratios_s[i]:.0f}x",
-                verdicts.welch(100 * sgb[ratios_s[i]], 100 * dgb[ratios_d[i]]),
+                stats.welch(100 * sgb[ratios_s[i]], 100 * dgb[ratios_d[i]]),
                 budget,
                 amount=CPU_EPOCHS,
             )
@@ -529,7 +529,7 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
         judge(
             "fig2.sgb_declines_slowly",
             f"{setting}, {ratios_s[0]:.0f}x to {ratios_s[-2]:.0f}x",
-            verdicts.welch(decline_d, decline_s),
+            stats.welch(decline_d, decline_s),
             budget,
             amount=CPU_EPOCHS,
         )
@@ -559,7 +559,7 @@ def _welch_table(a: dict, b: dict, pairs: list, names: tuple[str, str]) -> pd.Da
     ]
     rows = []
     for ratio_a, ratio_b in pairs:
-        test = verdicts.welch(100 * a[ratio_a], 100 * b[ratio_b])
+        test = stats.welch(100 * a[ratio_a], 100 * b[ratio_b])
         seeds = f"{a[ratio_a].size}, {b[ratio_b].size}"
         row = [test.estimate, test.low, test.high, test.p, test.detectable]
         rows.append([round(ratio_a), *row, seeds])
@@ -612,7 +612,7 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
         records = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
         sgb = _accuracies(records, "sgb", min_seeds=2)
         for ratio_s, ratio_d in nearest_pairs(sgb, dgb):
-            test = verdicts.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
+            test = stats.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
             rows.append(
                 judge(
                     "fig2.full.sgb_better_high",
@@ -654,7 +654,7 @@ def crossover_row(
     seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
     test = None  # where the mean curves do not cross: no crossing to put an interval on
     if not math.isnan(crossing.estimate):
-        test = verdicts.Test(
+        test = stats.Test(
             "t bootstrap of the first crossing",
             crossing.estimate,
             crossing.low,
@@ -752,7 +752,7 @@ def figure3_rows(
                 judge(
                     f"fig3.level_128.{key_infix}{env}",
                     label,
-                    verdicts.welch(vanilla / scale, top / scale),
+                    stats.welch(vanilla / scale, top / scale),
                     budget,
                     steps,
                 )
@@ -762,7 +762,7 @@ def figure3_rows(
                 judge(
                     f"fig3.fall_16.{key_infix}{env}",
                     label,
-                    verdicts.welch(top / scale, bottom / scale),
+                    stats.welch(top / scale, bottom / scale),
                     budget,
                     steps,
                 )
@@ -800,7 +800,7 @@ def typing_rows(results: dict, steps: int, score: str = "last_two_return") -> li
             judge(
                 "ch5.typing_explains_fall",
                 label,
-                verdicts.welch(a / vanilla, b / vanilla),
+                stats.welch(a / vanilla, b / vanilla),
                 f"{steps / 1e6:g}M steps, seeds {a.size} and {b.size}",
             )
         )
@@ -822,7 +822,7 @@ def figure4_rows(returns: dict) -> list[Row]:
     splits = [variance_split(v) for v in (x, y)]
     rel = [max(s.reliability, 0.0) for s in splits]
     attenuation = math.sqrt(rel[0] * rel[1])
-    test = verdicts.fisher_r(x.mean(axis=1), y.mean(axis=1))
+    test = stats.fisher_r(x.mean(axis=1), y.mean(axis=1))
     setting = (
         f"ant, 64 types, {x.shape[1]} episodes each (reliabilities "
         f"{splits[0].reliability:.2f}, {splits[1].reliability:.2f})"
@@ -870,7 +870,7 @@ def variability_row(summary: dict, setting: str, key: str = "title.variability")
     n, k, within = split["n_individuals"], split["episodes"], split["within_var"]
     percent = 100 / mean
     low, high = (between_sd_at(icc, within) * percent for icc in split["icc_ci"])
-    test = verdicts.Test(
+    test = stats.Test(
         "one-way F, SD between individuals",
         normal["between_sd"] * percent,
         low,
@@ -893,7 +893,7 @@ def figure5_rows(fig5: dict) -> list[Row]:
     The paper's effect: about 1 % of the return (what its plot data imply)."""
     returns = fig5["returns"]["normal"]
     ind, mean_net = np.asarray(returns["individuals"]), np.asarray(returns["mean_network"])
-    paired = verdicts.paired(ind.mean(axis=1), mean_net.mean(axis=1))
+    paired = stats.paired(ind.mean(axis=1), mean_net.mean(axis=1))
     effect = 0.01 * float(mean_net.mean())
     ours = judge(
         "fig5.population_beats_mean",
@@ -913,7 +913,7 @@ def figure5_rows(fig5: dict) -> list[Row]:
         "fig5.population_beats_mean",
         f"ant, 64 types, the authors' protocol: sampled actions, {a_all.shape[1]} episodes "
         f"each, mean network {a_mean.size} (Welch; their one-sample t = {authors['t']:.2f})",
-        verdicts.welch(a_all.mean(axis=1), a_mean),
+        stats.welch(a_all.mean(axis=1), a_mean),
         f"{a_all.shape[0]} individuals x {a_all.shape[1]} episodes, "
         f"{a_mean.size} mean-network episodes",
         paper_effect=a_effect,
@@ -924,7 +924,7 @@ def figure5_rows(fig5: dict) -> list[Row]:
     return [ours, theirs]
 
 
-def _pooled_test(name: str, pooled: dict, n: int, transform=None) -> verdicts.Test:
+def _pooled_test(name: str, pooled: dict, n: int, transform=None) -> stats.Test:
     """A random-effects pooled estimate (DerSimonian-Laird, normal interval) as a ``Test``;
     ``transform`` maps Fisher's z back to r where the pooling was on z."""
     estimate, (low, high) = pooled["random_effects"], pooled["random_effects_ci"]
@@ -932,7 +932,7 @@ def _pooled_test(name: str, pooled: dict, n: int, transform=None) -> verdicts.Te
     z = (math.atanh(estimate) if transform else estimate) / se
     detectable = 2.8 * se if transform is None else transform(2.8 * se)
     p = float(2 * scipy_stats.norm.sf(abs(z)))
-    return verdicts.Test(name, estimate, low, high, math.inf, p, detectable, n)
+    return stats.Test(name, estimate, low, high, math.inf, p, detectable, n)
 
 
 def populations_rows(results: dict) -> list[Row]:
@@ -981,7 +981,7 @@ def populations_rows(results: dict) -> list[Row]:
     return rows
 
 
-def _legs_row(setting: str, r: verdicts.Test, attenuation: float, budget: str, decide: str) -> Row:
+def _legs_row(setting: str, r: stats.Test, attenuation: float, budget: str, decide: str) -> Row:
     """Figure 4E's r against the paper's 0.64 as a measurement of ``attenuation`` (the root
     of the two bodies' reliabilities) sees it; with no reliability, an inconclusive row
     whose ``decide`` says what would tell the individuals apart."""
@@ -1009,12 +1009,12 @@ def _sd_below(bound: float) -> str:
     )
 
 
-def _stored_test(stored: dict, scale: float = 1.0) -> verdicts.Test:
-    """A ``verdicts.Test`` read back from a results file (``null`` dof: a normal test), its
+def _stored_test(stored: dict, scale: float = 1.0) -> stats.Test:
+    """A ``stats.Test`` read back from a results file (``null`` dof: a normal test), its
     estimate, interval and detectable effect multiplied by ``scale``."""
     dof = math.inf if stored["dof"] is None else stored["dof"]
     scaled = {k: scale * stored[k] for k in ("estimate", "low", "high", "detectable")}
-    return verdicts.Test(stored["name"], dof=dof, p=stored["p"], n=stored["n"], **scaled)
+    return stats.Test(stored["name"], dof=dof, p=stored["p"], n=stored["n"], **scaled)
 
 
 def regime_population_rows(results: dict) -> list[Row]:
@@ -1097,7 +1097,7 @@ def evolution_rows(results: dict) -> list[Row]:
             judge(
                 "ch6.evolution_stochastic_helps",
                 f"{results['dataset']}, {k} hidden types ({first['compression']:.0f}x)",
-                verdicts.paired(stochastic, deterministic),
+                stats.paired(stochastic, deterministic),
                 f"{len(first['mean_fitness'])} generations, {len(seeds)} seeds",
             )
         )
@@ -1147,7 +1147,7 @@ def _across_genomes(key: str, setting: str, differences, budget: str) -> Row:
             basis=claim.basis,
             budget=budget,
         )
-    return judge(key, setting, verdicts.one_sample(differences, 0.0), budget)
+    return judge(key, setting, stats.one_sample(differences, 0.0), budget)
 
 
 def innate_start_rows(results: dict) -> list[Row]:
@@ -1173,7 +1173,7 @@ def innate_start_rows(results: dict) -> list[Row]:
             judge(
                 "ch6.innate_start_rl",
                 f"{genome}, from {starts[start]}",
-                verdicts.one_sample(gains, 0.0),
+                stats.one_sample(gains, 0.0),
                 f"{len(gains)} seeds of {group[0]['eval_steps'][-1] / 1e6:.1f}M steps",
             )
         )
@@ -1205,7 +1205,7 @@ def innate_supervised_rows(results: dict) -> list[Row]:
                 judge(
                     "ch6.innate_start_supervised",
                     f"{results['dataset']}, from {start}, {measure}",
-                    verdicts.paired([score(r, start, measure) for r in records], fresh),
+                    stats.paired([score(r, start, measure) for r in records], fresh),
                     f"{len(records)} seeds, one epoch",
                 )
             )
@@ -1221,7 +1221,7 @@ def theorem_rows(theory: dict) -> list[Row]:
     rows = []
     for toy, name in (("convex", "A.1"), ("concave", "A.3")):
         t = theory["trajectories"][toy]
-        test = verdicts.estimate_test("Monte Carlo z", t["gap"][0], t["gap_stderr"][0], 1)
+        test = stats.estimate_test("Monte Carlo z", t["gap"][0], t["gap_stderr"][0], 1)
         rows.append(
             judge(
                 f"theorem.{name}",
@@ -1254,7 +1254,7 @@ def sigma_law_rows(toy: dict) -> list[Row]:
     ):
         if c <= 0:
             continue
-        test = verdicts.estimate_test("stationary spread", settled - predicted, sd, 1)
+        test = stats.estimate_test("stationary spread", settled - predicted, sd, 1)
         rows.append(
             judge(
                 "theorem.A.4",
@@ -1371,7 +1371,7 @@ def _trained(results: dict) -> bool:
     return len(vanilla) >= 2 and np.mean(vanilla) > (1000 if results["env"] == "ant" else 100)
 
 
-def _test_name(test: verdicts.Test | None) -> str:
+def _test_name(test: stats.Test | None) -> str:
     if test is None:
         return "-"
     return test.name if math.isnan(test.dof) else f"{test.name}, dof {test.dof:.0f}"

@@ -11,7 +11,7 @@ from importlib import metadata
 
 import numpy as np
 
-from sgb import claims, verdicts
+from sgb import claims, stats
 from sgb.claims import Row
 from sgb.results import Payload
 from sgb.rl.regimes import authors_scale
@@ -183,7 +183,7 @@ def _level_and_fall(prefix: str, env: str, card: Card) -> dict[str, str]:
             row = _row(card, key, who)
             name = f"{prefix}{what}_{settings}"
             texts |= row_texts(name, row)
-            power = None if row is None or row.test is None else verdicts.power_at(row.test, 0.3)
+            power = None if row is None or row.test is None else stats.power_at(row.test, 0.3)
             texts[f"{name}_power"] = NOT_RUN if power is None else f"{power:.0%}"
     return texts
 

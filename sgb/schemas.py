@@ -202,7 +202,7 @@ PROVENANCE = {
     "wall_time_s": SECONDS,
     "backend": str,
 }
-TEST = {  # a sgb.verdicts.Test as a file stores it; a null dof is a normal test
+TEST = {  # a sgb.stats.Test as a file stores it; a null dof is a normal test
     "name": str,
     "estimate": FINITE,
     "low": FINITE,

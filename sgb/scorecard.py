@@ -15,7 +15,7 @@ import math
 from collections import Counter
 from dataclasses import dataclass
 
-from sgb import verdicts
+from sgb import stats, verdicts
 from sgb.book import p_text
 from sgb.claims import Row
 
@@ -169,7 +169,7 @@ def holm_p(rows: list[Row]) -> list[float]:
     for name in dict.fromkeys(r.family for r in rows):
         mine = [i for i, r in enumerate(rows) if r.family == name]
         ps = [math.nan if rows[i].test is None else rows[i].test.p for i in mine]
-        for i, q in zip(mine, verdicts.holm(ps), strict=True):
+        for i, q in zip(mine, stats.holm(ps), strict=True):
             adjusted[i] = q
     return adjusted
 
@@ -179,7 +179,7 @@ def holm_text(rows: list[Row]) -> str:
     family (markdown)."""
     pairs = list(zip(rows, holm_p(rows), strict=True))
     kept = [(r, q) for r, q in pairs if r.verdict in verdicts.IN_DIRECTION]
-    survive = [r for r, q in kept if q < 1 - verdicts.LEVEL]
+    survive = [r for r, q in kept if q < 1 - stats.LEVEL]
     names = "; ".join(f"{r.figure}, {r.setting}" for r in survive) or "none"
     return (
         f"Corrected for the many tests of each figure (Holm, within the figure, theorem or "

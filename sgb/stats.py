@@ -1,5 +1,14 @@
-"""Summary statistics for seeds and populations: SEM, confidence intervals, Pearson r, paired t."""
+"""The statistics of the book, in one place: tests with their 95 % intervals and power
+(one type, ``Test``), the SEM and intervals of seeds and populations, Holm's correction,
+crossings of two curves, and pooling over genomes.
 
+Every test estimates an *effect* (a difference of means, or a correlation), with a
+two-sided 95 % confidence interval and the *detectable effect*: the smallest true effect
+that the test would find (p < 0.05, two-sided) with 80 % power at this sample size. The
+rule that turns a test into a verdict is ``sgb.verdicts``.
+"""
+
+import math
 from collections.abc import Mapping
 from typing import NamedTuple
 
@@ -8,13 +17,175 @@ from scipy import stats as scipy_stats
 
 from sgb import validation
 
+LEVEL = 0.95
+POWER = 0.8
 
-class TestResult(NamedTuple):
-    """A statistic, its p-value (two-sided) and the degrees of freedom or sample size."""
 
-    statistic: float
-    p_value: float
-    dof: int
+class _Fields(NamedTuple):  # Test's fields, checked by Test
+    name: str
+    estimate: float
+    low: float
+    high: float
+    dof: float
+    p: float
+    detectable: float
+    n: int
+    statistic: float = math.nan
+
+
+class Test(_Fields):
+    """One test: its name, the effect estimated, its 95 % interval (low, high), degrees of
+    freedom (``inf`` for a normal approximation), two-sided p against the null, the
+    effect detectable at 80 % power, and the sample size ``n`` per group.
+
+    The estimate and the interval must be finite, with low <= high; dof, p and the
+    detectable effect may be ``nan`` where the test has none (a bootstrap interval), else
+    dof > 0, p in [0, 1] and detectable > 0."""
+
+    __slots__ = ()
+
+    def __new__(cls, *args, **kwargs) -> "Test":
+        t = _Fields(*args, **kwargs)
+        low, high = validation.real("low", t.low), validation.real("high", t.high)
+        if low > high:
+            raise ValueError(f"low must be <= high, got the interval ({low!r}, {high!r})")
+        return super().__new__(
+            cls,
+            validation.instance("name", t.name, str),
+            validation.real("estimate", t.estimate),
+            low,
+            high,
+            _unless_nan(_dof, "dof", t.dof),
+            _unless_nan(validation.in_range, "p", t.p, 0.0, 1.0),
+            _unless_nan(validation.positive, "detectable", t.detectable),
+            validation.integer("n", t.n),
+            _unless_nan(validation.real, "statistic", t.statistic),
+        )
+
+    @classmethod
+    def _make(cls, iterable) -> "Test":
+        return cls(*iterable)
+
+
+def _unless_nan(check, name: str, value, *args) -> float:
+    """``check(name, value, *args)``, or nan where ``value`` is nan (none for this test)."""
+    if isinstance(value, float | np.floating) and math.isnan(value):
+        return math.nan
+    return check(name, value, *args)
+
+
+def _dof(name: str, value) -> float:
+    """Degrees of freedom as given (an int stays one): a real number > 0, or ``inf``."""
+    if value != math.inf:
+        validation.positive(name, value)
+    return value
+
+
+def _t_test(name: str, estimate: float, se: float, dof: float, n: int, null: float) -> Test:
+    """A t (or, for ``dof=inf``, z) test of ``estimate`` with standard error ``se``."""
+    se = validation.positive("the standard error", se)
+    dist = scipy_stats.norm if math.isinf(dof) else scipy_stats.t(dof)
+    half = dist.ppf(0.5 + LEVEL / 2) * se
+    detectable = (dist.ppf(0.5 + LEVEL / 2) + dist.ppf(POWER)) * se
+    statistic = (estimate - null) / se
+    p = 2 * dist.sf(abs(statistic))
+    low, high = estimate - half, estimate + half
+    return Test(name, estimate, low, high, dof, float(p), detectable, n, float(statistic))
+
+
+def welch(a, b) -> Test:
+    """Welch's t for mean(a) - mean(b) of two independent samples (Welch-Satterthwaite
+    degrees of freedom), not both constant; ``n`` is the smaller sample's size."""
+    a, b = validation.sample("a", a), validation.sample("b", b)
+    if np.ptp(a) == 0 and np.ptp(b) == 0:
+        raise ValueError("a and b are both constant, so the statistic is undefined")
+    va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
+    dof = (va + vb) ** 2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1))
+    return _t_test("Welch t", a.mean() - b.mean(), math.sqrt(va + vb), dof, min(a.size, b.size), 0)
+
+
+def paired(a, b) -> Test:
+    """Paired t for mean(a - b) (same units measured twice, a - b not constant); dof = n - 1."""
+    a, b = validation.sample("a", a), validation.sample("b", b)
+    if a.shape != b.shape:
+        raise ValueError(f"a and b must have the same length, got {a.size} and {b.size}")
+    d = validation.varying("a - b", a - b)
+    return _t_test("paired t", d.mean(), d.std(ddof=1) / math.sqrt(d.size), d.size - 1, d.size, 0)
+
+
+def one_sample(values, null: float) -> Test:
+    """One-sample t of mean(values) (not constant) against a fixed ``null``; dof = n - 1."""
+    v = validation.varying("values", validation.sample("values", values))
+    null = validation.real("null", null)
+    se = v.std(ddof=1) / math.sqrt(v.size)
+    return _t_test("one-sample t", v.mean(), se, v.size - 1, v.size, null)
+
+
+def estimate_test(name: str, estimate: float, stderr: float, n: int) -> Test:
+    """A z test of a Monte Carlo estimate with its standard error (normal approximation)."""
+    estimate, stderr = validation.real("estimate", estimate), validation.positive("stderr", stderr)
+    return _t_test(validation.instance("name", name, str), estimate, stderr, math.inf, n, 0)
+
+
+def fisher_r(x, y) -> Test:
+    """Pearson's r of two samples of the same length, at least 4, neither constant nor
+    the one a linear function of the other; ``fisher_from_r``."""
+    x, y = validation.sample("x", x, minimum=4), validation.sample("y", y, minimum=4)
+    if x.shape != y.shape:
+        raise ValueError(f"x and y must have the same length, got {x.size} and {y.size}")
+    validation.varying("x", x), validation.varying("y", y)
+    r = float(np.corrcoef(x, y)[0, 1])
+    if abs(r) == 1:
+        raise ValueError(f"x and y are perfectly correlated (r = {r}): Fisher's z is infinite")
+    return _fisher(r, x.size)
+
+
+def fisher_from_r(r: float, n: int) -> Test:
+    """Pearson's r of ``n`` >= 4 pairs, -1 < r < 1, with its Fisher-z interval; detectable:
+    the r that a test of r = 0 finds with 80 % power at this n; dof = n - 2."""
+    r = validation.real("r", r)
+    if not -1 < r < 1:
+        raise ValueError(f"r must lie in (-1, 1) (Fisher's z is infinite at +-1), got {r!r}")
+    return _fisher(r, validation.integer("n", n, minimum=4))
+
+
+def _fisher(r: float, n: int) -> Test:
+    z, se = math.atanh(r), 1 / math.sqrt(n - 3)
+    crit = scipy_stats.norm.ppf(0.5 + LEVEL / 2)
+    detectable = math.tanh((crit + scipy_stats.norm.ppf(POWER)) * se)
+    t = r * math.sqrt((n - 2) / (1 - r * r))  # the t of r = 0, n - 2 dof
+    p = float(2 * scipy_stats.t.sf(abs(t), n - 2))
+    low, high = math.tanh(z - crit * se), math.tanh(z + crit * se)
+    return Test("Fisher z", r, low, high, n - 2, p, detectable, n, t)
+
+
+def power_at(test: Test, effect: float) -> float:
+    """The power of ``test``'s design to detect a true ``effect`` (two-sided 5 %), at its
+    standard error and degrees of freedom (the test must have both: dof, and an interval
+    of positive width)."""
+    validation.instance("test", test, Test)
+    effect = validation.real("effect", effect)
+    if math.isnan(test.dof) or test.low == test.high:
+        raise ValueError(f"test needs a dof and an interval of some width, got {test!r}")
+    dist = scipy_stats.norm if math.isinf(test.dof) else scipy_stats.t(test.dof)
+    crit = float(dist.ppf(0.5 + LEVEL / 2))
+    se = (test.high - test.low) / (2 * crit)
+    shift = abs(effect) / se
+    return float(dist.sf(crit - shift) + dist.cdf(-crit - shift))
+
+
+def holm(p: list[float]) -> list[float]:
+    """Holm's step-down adjusted p-values of one family of tests, in the order given: the
+    i-th smallest p times (m - i + 1), made non-decreasing, at most 1. A ``nan`` p (a test
+    with none) stays ``nan`` and is not counted in the family's m. Rejecting where the
+    adjusted p < alpha keeps the chance of any false rejection in the family <= alpha."""
+    values = [validation.real("p", x) if not math.isnan(x) else x for x in p]
+    order = sorted((x, i) for i, x in enumerate(values) if not math.isnan(x))
+    m, adjusted, running = len(order), [math.nan] * len(values), 0.0
+    for rank, (x, i) in enumerate(order):
+        running = max(running, min(1.0, (m - rank) * x))
+        adjusted[i] = running
+    return adjusted
 
 
 def sem(values, axis: int = 0) -> np.ndarray:
@@ -28,13 +199,17 @@ def sem(values, axis: int = 0) -> np.ndarray:
     return values.std(axis=axis, ddof=1) / np.sqrt(values.shape[axis])
 
 
-def mean_ci(values, level: float = 0.95) -> tuple[float, float, float]:
+def mean_ci(values, level: float = LEVEL) -> tuple[float, float, float]:
     """Mean and Student-t confidence interval (mean, low, high) of a 1-D sample that varies."""
     level = validation.fraction("level", level)
-    values = validation.varying("values", validation.sample("values", values))
-    half = scipy_stats.t.ppf(0.5 + level / 2, values.size - 1) * sem(values)
-    mean = float(values.mean())
-    return mean, mean - float(half), mean + float(half)
+    return _t_interval(validation.varying("values", validation.sample("values", values)), level)
+
+
+def _t_interval(x: np.ndarray, level: float = LEVEL) -> tuple[float, float, float]:
+    """The mean of ``x`` (at least 2 values) and its Student-t interval at ``level``."""
+    half = float(scipy_stats.t.ppf(0.5 + level / 2, x.size - 1) * sem(x))
+    mean = float(x.mean())
+    return mean, mean - half, mean + half
 
 
 def _pair(names: tuple[str, str], x, y) -> tuple[np.ndarray, np.ndarray]:
@@ -47,28 +222,67 @@ def _pair(names: tuple[str, str], x, y) -> tuple[np.ndarray, np.ndarray]:
     return x, y
 
 
-def pearson(x, y) -> TestResult:
-    """Pearson's r between two equal-length samples, with its two-sided p-value."""
-    x, y = _pair(("x", "y"), x, y)
-    validation.varying("x", x), validation.varying("y", y)
-    result = scipy_stats.pearsonr(x, y)
-    return TestResult(float(result.statistic), float(result.pvalue), x.size - 2)
+def inverse_variance(estimates, ses) -> dict:
+    """Fixed-effect pooling of per-genome ``estimates`` with standard errors ``ses``
+    (weights 1 / se^2): the pooled estimate, its SE and normal 95 % interval; Cochran's Q
+    (k - 1 dof) with its p and I^2; the DerSimonian-Laird between-genome variance tau^2
+    and the random-effects estimate (weights 1 / (se^2 + tau^2)) with its interval."""
+    x = np.asarray(estimates, dtype=np.float64)
+    w = 1 / np.asarray(ses, dtype=np.float64) ** 2
+    crit = scipy_stats.norm.ppf(0.5 + LEVEL / 2)
+    pooled, se = float((w * x).sum() / w.sum()), float(1 / math.sqrt(w.sum()))
+    q, dof = float((w * (x - pooled) ** 2).sum()), x.size - 1
+    tau2 = max(0.0, (q - dof) / (w.sum() - (w**2).sum() / w.sum())) if dof > 0 else math.nan
+    w_re = 1 / (1 / w + (tau2 if dof > 0 else 0.0))
+    random, se_re = float((w_re * x).sum() / w_re.sum()), float(1 / math.sqrt(w_re.sum()))
+    return {
+        "estimate": pooled,
+        "se": se,
+        "ci": (pooled - crit * se, pooled + crit * se),
+        "q": q,
+        "q_dof": dof,
+        "q_p": float(scipy_stats.chi2.sf(q, dof)) if dof > 0 else math.nan,
+        "i2": max(0.0, (q - dof) / q) if q > 0 else 0.0,
+        "tau2": tau2,
+        "random_effects": random,
+        "random_effects_se": se_re,
+        "random_effects_ci": (random - crit * se_re, random + crit * se_re),
+    }
 
 
-def paired_t(a, b) -> TestResult:
-    """Paired t-test of a - b against zero; dof = n - 1."""
-    a, b = _pair(("a", "b"), a, b)
-    validation.varying("a - b", a - b)
-    result = scipy_stats.ttest_rel(a, b)
-    return TestResult(float(result.statistic), float(result.pvalue), a.size - 1)
+def between_genomes(estimates) -> dict:
+    """The spread of per-genome ``estimates``: their mean, SD and Student-t 95 % interval
+    over genomes (k - 1 dof): what a claim about genomes of this setting in general can
+    lean on. With 3 genomes that is 2 dof (t = 4.30): only a spread far above the
+    estimates' own errors shows, and the interval is wide."""
+    x = np.asarray(estimates, dtype=np.float64)
+    if x.size < 2:
+        return {"n_genomes": 1, "mean": float(x[0]), "sd": math.nan, "ci": (math.nan, math.nan)}
+    mean, low, high = (float(v) for v in _t_interval(x))
+    return {"n_genomes": int(x.size), "mean": mean, "sd": float(x.std(ddof=1)), "ci": (low, high)}
 
 
-def one_sample_t(values, reference: float) -> TestResult:
-    """One-sample t-test of the mean of ``values`` against a fixed ``reference``; dof = n - 1."""
-    values = validation.varying("values", validation.sample("values", values))
-    reference = validation.real("reference", reference)
-    result = scipy_stats.ttest_1samp(values, reference)
-    return TestResult(float(result.statistic), float(result.pvalue), values.size - 1)
+def between_genomes_r(rs) -> dict:
+    """``between_genomes`` of correlations, on Fisher's z: the mean and interval back on
+    the r scale, the SD (``z_sd``) on the z scale."""
+    z = np.arctanh(np.clip(np.asarray(rs, dtype=np.float64), -1 + 1e-12, 1 - 1e-12))
+    out = between_genomes(z)
+    out["z_sd"] = out.pop("sd")
+    out["mean"], out["ci"] = math.tanh(out["mean"]), tuple(np.tanh(out["ci"]).tolist())
+    return out
+
+
+def pooled_r(rs, ns) -> dict:
+    """Per-genome correlations ``rs`` of ``ns`` pairs pooled by Fisher z (weights n - 3):
+    ``inverse_variance`` on z, with the estimate and intervals back on the r scale."""
+    z = np.arctanh(np.clip(np.asarray(rs, dtype=np.float64), -1 + 1e-12, 1 - 1e-12))
+    pooled = inverse_variance(z, 1 / np.sqrt(np.asarray(ns, dtype=np.float64) - 3))
+    out = {"z_se": pooled.pop("se"), "random_effects_z_se": pooled.pop("random_effects_se")}
+    for key in ("estimate", "random_effects"):
+        pooled[key] = math.tanh(pooled[key])
+    for key in ("ci", "random_effects_ci"):
+        pooled[key] = tuple(math.tanh(v) for v in pooled[key])
+    return {**pooled, **out}
 
 
 def _log_curve(side: str, x, y) -> tuple[np.ndarray, np.ndarray]:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from scipy import stats as scipy_stats
 
+from sgb import stats
 from sgb.experiments import populations
 from sgb.paths import committed_results
 from sgb.provenance import _jsonable, read_results
@@ -83,19 +84,19 @@ def test_the_paired_difference_covers_the_truth():
 def test_the_pooled_difference_is_the_inverse_variance_mean():
     estimates, ses = np.array([1.0, 2.0, 4.0]), np.array([1.0, 0.5, 2.0])
     w = 1 / ses**2
-    pooled = populations.inverse_variance(estimates, ses)
+    pooled = stats.inverse_variance(estimates, ses)
     assert pooled["estimate"] == pytest.approx((w * estimates).sum() / w.sum())
     assert pooled["se"] == pytest.approx(1 / math.sqrt(w.sum()))
     assert pooled["ci"][1] - pooled["estimate"] == pytest.approx(1.959964 * pooled["se"])
     assert pooled["q"] == pytest.approx((w * (estimates - pooled["estimate"]) ** 2).sum())
     # genomes that agree: no spread between them, random effects = fixed effect
-    same = populations.inverse_variance([2.0, 2.0, 2.0], ses)
+    same = stats.inverse_variance([2.0, 2.0, 2.0], ses)
     assert same["tau2"] == 0.0 and same["random_effects"] == pytest.approx(same["estimate"])
     # genomes far apart: a spread, and a wider random-effects interval
-    apart = populations.inverse_variance([0.0, 10.0, 20.0], [1.0, 1.0, 1.0])
+    apart = stats.inverse_variance([0.0, 10.0, 20.0], [1.0, 1.0, 1.0])
     assert apart["tau2"] == pytest.approx(100 - 1)  # DerSimonian-Laird: var of the 3 - se^2
     assert apart["random_effects_se"] > 5 * apart["se"]
-    spread = populations.between_genomes([0.0, 10.0, 20.0])
+    spread = stats.between_genomes([0.0, 10.0, 20.0])
     half = scipy_stats.t.ppf(0.975, 2) * 10 / math.sqrt(3)
     assert spread["ci"] == pytest.approx((10 - half, 10 + half))
 

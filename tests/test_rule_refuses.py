@@ -24,7 +24,7 @@ FEW = settings(max_examples=150, derandomize=True, database=None, deadline=None)
 
 NAN, INF = math.nan, math.inf
 A, B = [1.2, 1.4, 1.1, 1.9, 1.5], [0.2, 0.5, 0.1, 0.9, 0.4]
-WELCH = verdicts.welch(A, B)
+WELCH = stats.welch(A, B)
 RETURNS = np.array([[1.0, 2.0, 3.0], [2.0, 3.0, 5.0], [0.0, 1.0, 1.0]])
 SPLIT = reliability.variance_split(RETURNS)
 CURVE_A = {10.0: [0.90, 0.91], 100.0: [0.80, 0.82], 700.0: [0.50, 0.52]}
@@ -48,20 +48,20 @@ REFUSED = {
         "detectable",
     ),
     "a Test of no units": (lambda: WELCH._replace(n=0), "n"),
-    "fisher_from_r of a nan r": (lambda: verdicts.fisher_from_r(NAN, 10), "r"),
-    "fisher_from_r of r = 1.5": (lambda: verdicts.fisher_from_r(1.5, 10), "r"),
-    "fisher_from_r of r = -1": (lambda: verdicts.fisher_from_r(-1.0, 10), "r"),
-    "fisher_from_r of 3 pairs": (lambda: verdicts.fisher_from_r(0.3, 3), "n"),
-    "fisher_from_r of 2 pairs": (lambda: verdicts.fisher_from_r(0.3, 2), "n"),
-    "fisher_r of constant samples": (lambda: verdicts.fisher_r([1.0] * 5, [2.0] * 5), "x"),
-    "fisher_r of a perfect line": (lambda: verdicts.fisher_r(A, 2 * np.array(A)), "x and y"),
-    "welch of two constant samples": (lambda: verdicts.welch([1.0] * 3, [2.0] * 4), "a and b"),
-    "paired with a constant difference": (lambda: verdicts.paired([1, 2, 4], [2, 3, 5]), "a - b"),
-    "one_sample of a constant": (lambda: verdicts.one_sample([3.0] * 4, 0.0), "values"),
-    "estimate_test with no error": (lambda: verdicts.estimate_test("z", 1.0, 0.0, 1), "stderr"),
+    "fisher_from_r of a nan r": (lambda: stats.fisher_from_r(NAN, 10), "r"),
+    "fisher_from_r of r = 1.5": (lambda: stats.fisher_from_r(1.5, 10), "r"),
+    "fisher_from_r of r = -1": (lambda: stats.fisher_from_r(-1.0, 10), "r"),
+    "fisher_from_r of 3 pairs": (lambda: stats.fisher_from_r(0.3, 3), "n"),
+    "fisher_from_r of 2 pairs": (lambda: stats.fisher_from_r(0.3, 2), "n"),
+    "fisher_r of constant samples": (lambda: stats.fisher_r([1.0] * 5, [2.0] * 5), "x"),
+    "fisher_r of a perfect line": (lambda: stats.fisher_r(A, 2 * np.array(A)), "x and y"),
+    "welch of two constant samples": (lambda: stats.welch([1.0] * 3, [2.0] * 4), "a and b"),
+    "paired with a constant difference": (lambda: stats.paired([1, 2, 4], [2, 3, 5]), "a - b"),
+    "one_sample of a constant": (lambda: stats.one_sample([3.0] * 4, 0.0), "values"),
+    "estimate_test with no error": (lambda: stats.estimate_test("z", 1.0, 0.0, 1), "stderr"),
     "units_to_decide for a nan paper": (lambda: verdicts.units_to_decide(WELCH, NAN), "paper"),
     "units_to_decide for r = 1": (
-        lambda: verdicts.units_to_decide(verdicts.fisher_from_r(0.2, 20), 1.0),
+        lambda: verdicts.units_to_decide(stats.fisher_from_r(0.2, 20), 1.0),
         "paper",
     ),
     "units_to_decide with no detectable effect": (
@@ -69,7 +69,7 @@ REFUSED = {
         "detectable",
     ),
     "power_at of a test without dof": (
-        lambda: verdicts.power_at(WELCH._replace(dof=NAN), 1),
+        lambda: stats.power_at(WELCH._replace(dof=NAN), 1),
         "dof",
     ),
     "crossings of an empty curve": (
@@ -136,14 +136,14 @@ def test_a_test_is_checked_however_it_is_built():
     """Keywords, ``_replace``, ``_make`` and pickling all pass through the checks, and a
     valid test survives them unchanged; dof, p and the detectable effect may be nan (a
     bootstrap interval has none) while the estimate and interval may not."""
-    assert verdicts.Test(**WELCH._asdict()) == WELCH
+    assert stats.Test(**WELCH._asdict()) == WELCH
     assert pickle.loads(pickle.dumps(WELCH)) == WELCH
     with pytest.raises(ValueError, match="high"):
-        verdicts.Test._make([*WELCH[:3], INF, *WELCH[4:]])
-    bootstrap = verdicts.Test("bootstrap", 60.0, 20.0, 500.0, NAN, NAN, NAN, 3)
+        stats.Test._make([*WELCH[:3], INF, *WELCH[4:]])
+    bootstrap = stats.Test("bootstrap", 60.0, 20.0, 500.0, NAN, NAN, NAN, 3)
     assert math.isnan(bootstrap.p) and verdicts.verdict(bootstrap, 1.0) == verdicts.LARGER
     with pytest.raises(TypeError, match="name"):
-        verdicts.Test(None, *WELCH[1:])
+        stats.Test(None, *WELCH[1:])
 
 
 def test_documented_limits_stay_numbers():
@@ -160,10 +160,10 @@ FINITE = st.floats(-1e6, 1e6).map(lambda v: v + 0.0)  # -0.0 as 0.0
 
 
 @st.composite
-def finite_tests(draw) -> verdicts.Test:
+def finite_tests(draw) -> stats.Test:
     """A valid test: any finite interval, an estimate inside it, a normal or t test."""
     low, high = sorted((draw(FINITE), draw(FINITE)))
-    return verdicts.Test(
+    return stats.Test(
         "drawn",
         draw(st.floats(low, high)),
         low,
@@ -175,12 +175,12 @@ def finite_tests(draw) -> verdicts.Test:
     )
 
 
-def near(test: verdicts.Test):
+def near(test: stats.Test):
     """A finite effect, often exactly at an end of the interval, its estimate or 0."""
     return st.one_of(FINITE, st.sampled_from([test.low, test.high, test.estimate, 0.0]))
 
 
-def definition(test: verdicts.Test, paper: float, null: float) -> str:
+def definition(test: stats.Test, paper: float, null: float) -> str:
     """The rule as the module docstring words it."""
     on_paper_side = test.low > null if paper > null else test.high < null
     if on_paper_side:
@@ -193,11 +193,11 @@ def definition(test: verdicts.Test, paper: float, null: float) -> str:
     return verdicts.INCONCLUSIVE
 
 
-def mirrored(test: verdicts.Test) -> verdicts.Test:
+def mirrored(test: stats.Test) -> stats.Test:
     return test._replace(estimate=-test.estimate, low=-test.high, high=-test.low)
 
 
-def decides_at(test: verdicts.Test, paper: float, null: float) -> None:
+def decides_at(test: stats.Test, paper: float, null: float) -> None:
     """``units_to_decide`` is the least sample size at which the detectable effect, scaled
     as 1/sqrt(n), reaches the paper's; an effect too small for any finite one is refused."""
     effect = abs(paper - null)
@@ -230,10 +230,10 @@ def test_the_verdict_of_a_finite_test_is_a_state_of_the_rule_and_its_definition(
         assert inside and test.low <= null <= test.high
         decides_at(test, paper, null)
     if test.low < test.high:
-        assert 0.0 <= verdicts.power_at(test, paper - null) <= 1.0
+        assert 0.0 <= stats.power_at(test, paper - null) <= 1.0
     else:  # a point interval: no standard error to scale
         with pytest.raises(ValueError, match="width"):
-            verdicts.power_at(test, paper - null)
+            stats.power_at(test, paper - null)
 
 
 SAMPLE = st.lists(st.floats(-1e3, 1e3).map(lambda v: round(v, 1)), min_size=2, max_size=12)
@@ -247,9 +247,9 @@ def test_every_test_of_finite_samples_is_finite_or_a_named_refusal(a, b, paper):
     80 % power, or, for a
     design they cannot test, an error naming it; the verdict is then a state."""
     calls = {
-        "welch": lambda: verdicts.welch(a, b),
-        "paired": lambda: verdicts.paired(a, b[: len(a)] + a[len(b) :]),
-        "fisher": lambda: verdicts.fisher_r(a, b[: len(a)] + a[len(b) :]),
+        "welch": lambda: stats.welch(a, b),
+        "paired": lambda: stats.paired(a, b[: len(a)] + a[len(b) :]),
+        "fisher": lambda: stats.fisher_r(a, b[: len(a)] + a[len(b) :]),
     }
     for name, call in calls.items():
         try:
@@ -261,37 +261,34 @@ def test_every_test_of_finite_samples_is_finite_or_a_named_refusal(a, b, paper):
         assert test.low <= test.estimate <= test.high and 0.0 <= test.p <= 1.0
         assert verdicts.verdict(test, paper) in STATES
         if name != "fisher" and test.high > test.low:
-            assert verdicts.power_at(test, 0.0) == pytest.approx(0.05)
-            assert verdicts.power_at(test, test.detectable) == pytest.approx(0.8, abs=0.02)
+            assert stats.power_at(test, 0.0) == pytest.approx(0.05)
+            assert stats.power_at(test, test.detectable) == pytest.approx(0.8, abs=0.02)
 
 
 # one valid call of each public function; ``targets`` are the arguments a non-finite
 # value can replace (a sequence: at a drawn position), with the name its error must give
 CALLS = {
     "Test": (
-        lambda **k: verdicts.Test(**k),
+        lambda **k: stats.Test(**k),
         dict(name="t", estimate=0.5, low=0.1, high=0.9, dof=4.0, p=0.2, detectable=0.3, n=5),
         {"estimate": "estimate", "low": "low", "high": "high"},
     ),
     "verdict": (verdicts.verdict, dict(test=WELCH, paper=1.0, null=0.0), None),
     "paper_inside": (verdicts.paper_inside, dict(test=WELCH, paper=1.0), None),
     "units_to_decide": (verdicts.units_to_decide, dict(test=WELCH, paper=0.1, null=0.0), None),
-    "power_at": (verdicts.power_at, dict(test=WELCH, effect=0.5), None),
-    "welch": (verdicts.welch, dict(a=A, b=B), None),
-    "paired": (verdicts.paired, dict(a=A, b=B), None),
-    "one_sample": (verdicts.one_sample, dict(values=A, null=0.0), None),
+    "power_at": (stats.power_at, dict(test=WELCH, effect=0.5), None),
+    "welch": (stats.welch, dict(a=A, b=B), None),
+    "paired": (stats.paired, dict(a=A, b=B), None),
+    "one_sample": (stats.one_sample, dict(values=A, null=0.0), None),
     "estimate_test": (
-        verdicts.estimate_test,
+        stats.estimate_test,
         dict(name="z", estimate=1.0, stderr=0.5, n=1),
         {"estimate": "estimate", "stderr": "stderr"},
     ),
-    "fisher_r": (verdicts.fisher_r, dict(x=A, y=B), None),
-    "fisher_from_r": (verdicts.fisher_from_r, dict(r=0.3, n=10), {"r": "r"}),
+    "fisher_r": (stats.fisher_r, dict(x=A, y=B), None),
+    "fisher_from_r": (stats.fisher_from_r, dict(r=0.3, n=10), {"r": "r"}),
     "sem": (stats.sem, dict(values=A), None),
     "mean_ci": (stats.mean_ci, dict(values=A, level=0.9), None),
-    "pearson": (stats.pearson, dict(x=A, y=B), None),
-    "paired_t": (stats.paired_t, dict(a=A, b=B), None),
-    "one_sample_t": (stats.one_sample_t, dict(values=A, reference=1.0), None),
     "crossings": (
         stats.crossings,
         dict(x_a=[1.0, 10.0, 100.0], y_a=[0.0, 1.0, 2.0], x_b=[2.0, 50.0], y_b=[1.0, 0.5]),
@@ -337,7 +334,7 @@ def non_finite_targets(which: str) -> dict[str, str]:
     _, valid, targets = CALLS[which]
     if targets is not None:
         return targets
-    return {name: name for name, v in valid.items() if not isinstance(v, verdicts.Test | str)}
+    return {name: name for name, v in valid.items() if not isinstance(v, stats.Test | str)}
 
 
 @RULE

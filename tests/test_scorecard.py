@@ -8,12 +8,12 @@ import re
 import numpy as np
 import pytest
 
-from sgb import claims, scorecard, verdicts
+from sgb import claims, scorecard, stats, verdicts
 from sgb.paths import committed_results
 
 
 def _row(key: str, verdict: str, estimate: float = 1.0, setting: str = "s") -> claims.Row:
-    test = verdicts.estimate_test("Monte Carlo z", estimate, 0.5, 10)
+    test = stats.estimate_test("Monte Carlo z", estimate, 0.5, 10)
     claim = claims.CLAIMS.get(key) or claims.Claim(key, "Figure 9", "a claim", "p", "e", 1, "", "")
     return claims.Row(claim, setting, 1.0, "", test, "b", verdict, "")
 
@@ -128,7 +128,7 @@ def test_holm_corrects_within_each_figure_and_the_page_names_the_survivors():
     adjusted = scorecard.holm_p(rows)
     figure3 = [i for i, r in enumerate(rows) if r.figure.startswith("Figure 3")]
     assert {rows[i].figure for i in figure3} >= {"Figure 3C", "Figure 3D"}
-    expected = verdicts.holm([rows[i].test.p for i in figure3])
+    expected = stats.holm([rows[i].test.p for i in figure3])
     np.testing.assert_allclose([adjusted[i] for i in figure3], expected)
     pairs = list(zip(rows, adjusted, strict=True))
     assert all(q >= r.test.p for r, q in pairs if r.test and not np.isnan(q))
@@ -161,7 +161,7 @@ def test_the_page_places_every_claim_of_the_table_once():
     claim the table lacks; a claim whose effect each setting sets is refused without it."""
     placed = [key for keys in scorecard.CLAIMS for key in keys]
     assert sorted(placed) == sorted(claims.CLAIMS)
-    test = verdicts.estimate_test("Monte Carlo z", 1.0, 0.5, 10)
+    test = stats.estimate_test("Monte Carlo z", 1.0, 0.5, 10)
     with pytest.raises(ValueError, match="fig4e.r_legs"):
         claims.judge("fig4e.r_legs", "s", test, "b")
     row = claims.judge("fig4e.r_legs", "s", test, "b", paper_effect=0.5, basis="half")

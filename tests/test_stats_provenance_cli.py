@@ -18,29 +18,26 @@ def test_sem_and_confidence_interval_cover_the_true_mean_at_the_stated_rate():
     np.testing.assert_allclose(stats.sem(samples[0]), samples[0].std(ddof=1) / np.sqrt(10))
 
 
-def test_pearson_and_paired_t_agree_with_direct_formulas():
+def test_r_and_the_t_tests_agree_with_scipy():
+    """Each test's estimate, statistic and p against scipy's own: Pearson's r, the paired
+    and the one-sample t (the statistic the Figure 5 protocols write)."""
     rng = np.random.default_rng(1)
     x = rng.normal(size=50)
     y = 0.6 * x + rng.normal(size=50)
-    r = stats.pearson(x, y)
-    assert r.statistic == pytest.approx(np.corrcoef(x, y)[0, 1])
-    assert r.dof == 48
-    d = y - x
-    t = stats.paired_t(y, x)
-    assert t.statistic == pytest.approx(d.mean() / (d.std(ddof=1) / np.sqrt(50)))
-    assert t.p_value == pytest.approx(2 * scipy_stats.t.sf(abs(t.statistic), 49))
-    one = stats.one_sample_t(y, 0.25)
-    assert one.statistic == pytest.approx((y.mean() - 0.25) / (y.std(ddof=1) / np.sqrt(50)))
-    assert one.dof == 49 and one.p_value == pytest.approx(
-        2 * scipy_stats.t.sf(abs(one.statistic), 49)
-    )
+    r, theirs = stats.fisher_r(x, y), scipy_stats.pearsonr(x, y)
+    assert (r.estimate, r.p, r.dof) == pytest.approx((theirs.statistic, theirs.pvalue, 48))
+    t, theirs = stats.paired(y, x), scipy_stats.ttest_rel(y, x)
+    assert (t.statistic, t.p, t.dof) == pytest.approx((theirs.statistic, theirs.pvalue, 49))
+    assert t.estimate == pytest.approx(np.mean(y - x))
+    one, theirs = stats.one_sample(y, 0.25), scipy_stats.ttest_1samp(y, 0.25)
+    assert (one.statistic, one.p, one.dof) == pytest.approx((theirs.statistic, theirs.pvalue, 49))
 
 
 def test_stats_reject_bad_input():
     with pytest.raises(ValueError, match="same length"):
-        stats.pearson([1, 2, 3], [1, 2])
+        stats.fisher_r([1, 2, 3, 4, 5], [1, 2, 3, 4])
     with pytest.raises(ValueError, match="at least 2"):
-        stats.paired_t([1.0], [2.0])
+        stats.paired([1.0], [2.0])
     with pytest.raises(ValueError, match="level"):
         stats.mean_ci([1, 2, 3], level=1.5)
 

@@ -55,9 +55,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
-from scipy import stats as scipy_stats
 
-from sgb import validation, verdicts
+from sgb import stats, validation
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
@@ -186,7 +185,7 @@ def split_half(returns: np.ndarray) -> dict:
     2r / (1 + r), with the interval's ends transformed alike."""
     x = np.asarray(returns, dtype=np.float64)
     half = x.shape[1] // 2
-    test = verdicts.fisher_r(x[:, 0 : 2 * half : 2].mean(1), x[:, 1 : 2 * half : 2].mean(1))
+    test = stats.fisher_r(x[:, 0 : 2 * half : 2].mean(1), x[:, 1 : 2 * half : 2].mean(1))
 
     def brown(r: float) -> float:
         return 2 * r / (1 + r)
@@ -230,7 +229,7 @@ def legs_correlation(normal: np.ndarray, long_legs: np.ndarray) -> dict:
     rel_long) (the ANOVA reliabilities; None when either is <= 0), with the interval's
     ends divided alike (the reliabilities' own uncertainty left out)."""
     normal, long_legs = np.asarray(normal), np.asarray(long_legs)
-    test = verdicts.fisher_r(normal.mean(1), long_legs.mean(1))
+    test = stats.fisher_r(normal.mean(1), long_legs.mean(1))
     rel = [variance_split(x).reliability for x in (normal, long_legs)]
     factor = math.sqrt(rel[0] * rel[1]) if min(rel) > 0 else math.nan
     return {
@@ -249,7 +248,7 @@ def mean_network_difference(individuals: np.ndarray, mean_network: np.ndarray) -
     ind, net = np.asarray(individuals), np.asarray(mean_network)
     if ind.shape != net.shape:
         raise ValueError(f"individuals {ind.shape} and mean network {net.shape} must match")
-    test = verdicts.paired(ind.mean(1), net.mean(1))
+    test = stats.paired(ind.mean(1), net.mean(1))
     base = float(net.mean())
     se = float(np.std(ind.mean(1) - net.mean(1), ddof=1) / math.sqrt(ind.shape[0]))
     return {
@@ -270,8 +269,8 @@ def authors_comparison(individuals: np.ndarray, mean_network: np.ndarray) -> dic
     means = np.asarray(individuals, dtype=np.float64).mean(1)
     episodes = np.ravel(np.asarray(mean_network, dtype=np.float64))
     base = float(episodes.mean())
-    one = verdicts.one_sample(means - base, 0.0)  # the difference, the base taken as exact
-    welch = verdicts.welch(means, episodes)
+    one = stats.one_sample(means - base, 0.0)  # the difference, the base taken as exact
+    welch = stats.welch(means, episodes)
     se_ind = float(means.std(ddof=1) / math.sqrt(means.size))
     se_net = float(episodes.std(ddof=1) / math.sqrt(episodes.size))
     difference = float(means.mean()) - base
@@ -304,74 +303,6 @@ def genome_summary(returns: dict) -> dict:
 # Pooled over the genomes of one setting --------------------------------------------------
 
 
-def inverse_variance(estimates, ses) -> dict:
-    """Fixed-effect pooling of per-genome ``estimates`` with standard errors ``ses``
-    (weights 1 / se^2): the pooled estimate, its SE and normal 95 % interval; Cochran's Q
-    (k - 1 dof) with its p and I^2; the DerSimonian-Laird between-genome variance tau^2
-    and the random-effects estimate (weights 1 / (se^2 + tau^2)) with its interval."""
-    x = np.asarray(estimates, dtype=np.float64)
-    w = 1 / np.asarray(ses, dtype=np.float64) ** 2
-    crit = scipy_stats.norm.ppf(0.5 + verdicts.LEVEL / 2)
-    pooled, se = float((w * x).sum() / w.sum()), float(1 / math.sqrt(w.sum()))
-    q, dof = float((w * (x - pooled) ** 2).sum()), x.size - 1
-    tau2 = max(0.0, (q - dof) / (w.sum() - (w**2).sum() / w.sum())) if dof > 0 else math.nan
-    w_re = 1 / (1 / w + (tau2 if dof > 0 else 0.0))
-    random, se_re = float((w_re * x).sum() / w_re.sum()), float(1 / math.sqrt(w_re.sum()))
-    return {
-        "estimate": pooled,
-        "se": se,
-        "ci": (pooled - crit * se, pooled + crit * se),
-        "q": q,
-        "q_dof": dof,
-        "q_p": float(scipy_stats.chi2.sf(q, dof)) if dof > 0 else math.nan,
-        "i2": max(0.0, (q - dof) / q) if q > 0 else 0.0,
-        "tau2": tau2,
-        "random_effects": random,
-        "random_effects_se": se_re,
-        "random_effects_ci": (random - crit * se_re, random + crit * se_re),
-    }
-
-
-def between_genomes(estimates) -> dict:
-    """The spread of per-genome ``estimates``: their mean, SD and Student-t 95 % interval
-    over genomes (k - 1 dof): what a claim about genomes of this setting in general can
-    lean on. With 3 genomes that is 2 dof (t = 4.30): only a spread far above the
-    estimates' own errors shows, and the interval is wide."""
-    x = np.asarray(estimates, dtype=np.float64)
-    if x.size < 2:
-        return {"n_genomes": 1, "mean": float(x[0]), "sd": math.nan, "ci": (math.nan, math.nan)}
-    mean, low, high = (float(v) for v in _t_interval(x))
-    return {"n_genomes": int(x.size), "mean": mean, "sd": float(x.std(ddof=1)), "ci": (low, high)}
-
-
-def between_genomes_r(rs) -> dict:
-    """``between_genomes`` of correlations, on Fisher's z: the mean and interval back on
-    the r scale, the SD (``z_sd``) on the z scale."""
-    z = np.arctanh(np.clip(np.asarray(rs, dtype=np.float64), -1 + 1e-12, 1 - 1e-12))
-    out = between_genomes(z)
-    out["z_sd"] = out.pop("sd")
-    out["mean"], out["ci"] = math.tanh(out["mean"]), tuple(np.tanh(out["ci"]).tolist())
-    return out
-
-
-def _t_interval(x: np.ndarray) -> tuple[float, float, float]:
-    half = scipy_stats.t.ppf(0.5 + verdicts.LEVEL / 2, x.size - 1) * x.std(ddof=1)
-    return x.mean(), x.mean() - half / math.sqrt(x.size), x.mean() + half / math.sqrt(x.size)
-
-
-def pooled_r(rs, ns) -> dict:
-    """Per-genome correlations ``rs`` of ``ns`` pairs pooled by Fisher z (weights n - 3):
-    ``inverse_variance`` on z, with the estimate and intervals back on the r scale."""
-    z = np.arctanh(np.clip(np.asarray(rs, dtype=np.float64), -1 + 1e-12, 1 - 1e-12))
-    pooled = inverse_variance(z, 1 / np.sqrt(np.asarray(ns, dtype=np.float64) - 3))
-    out = {"z_se": pooled.pop("se"), "random_effects_z_se": pooled.pop("random_effects_se")}
-    for key in ("estimate", "random_effects"):
-        pooled[key] = math.tanh(pooled[key])
-    for key in ("ci", "random_effects_ci"):
-        pooled[key] = tuple(math.tanh(v) for v in pooled[key])
-    return {**pooled, **out}
-
-
 def pool_setting(summaries: list[dict]) -> dict:
     """Figure 5's difference (return units and percent of the mean network) and Figure
     4E's r pooled over the genome ``summaries`` of one setting, each with the spread over
@@ -385,13 +316,13 @@ def pool_setting(summaries: list[dict]) -> dict:
     out: dict = {"n_genomes": len(summaries)}
     for key, (values, se) in measures.items():
         out[key] = {
-            "fixed_effect": inverse_variance(values, [d[se] for d in diffs]),
-            "between_genomes": between_genomes(values),
+            "fixed_effect": stats.inverse_variance(values, [d[se] for d in diffs]),
+            "between_genomes": stats.between_genomes(values),
         }
     rs = [t["estimate"] for t in legs]
     out["legs_r"] = {
-        "fixed_effect": pooled_r(rs, [t["n"] for t in legs]),
-        "between_genomes": between_genomes_r(rs),
+        "fixed_effect": stats.pooled_r(rs, [t["n"] for t in legs]),
+        "between_genomes": stats.between_genomes_r(rs),
     }
     return out
 

@@ -131,10 +131,10 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
         color=PALETTE["individuals"],
         line_kws={"lw": 1, "label": "least-squares fit, 95 % band"},
     )
-    r = stats.pearson(x.mean(1), y.mean(1))
+    r = stats.fisher_r(x.mean(1), y.mean(1))
     ax.set_xlabel(f"return, {a.replace('_', ' ')}")
     ax.set_ylabel(f"return, {b.replace('_', ' ')}")
-    ax.set_title(f"Pearson r = {r.statistic:.2f} (p = {r.p_value:.2g}, n = {x.shape[0]})")
+    ax.set_title(f"Pearson r = {r.estimate:.2f} (p = {r.p:.2g}, n = {x.shape[0]})")
     ax.legend(loc="upper left")
     return ax
 
@@ -145,8 +145,8 @@ def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
     t-test."""
     ind = np.asarray(returns[condition]["individuals"]).mean(1)
     mean_net = np.asarray(returns[condition]["mean_network"]).mean(1)
-    t = stats.paired_t(ind, mean_net)
-    title = f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p_value:.2g}"
+    t = stats.paired(ind, mean_net)
+    title = f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p:.2g}"
     return _population_and_mean_network(ind, mean_net, title, "innate return", ax)
 
 

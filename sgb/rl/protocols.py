@@ -70,8 +70,8 @@ def compare(returns: dict, a: str, b: str) -> dict:
     """Pearson r (with p) of the individuals' mean returns on conditions ``a`` and ``b``."""
     x = returns[a]["individuals"].mean(axis=1)
     y = returns[b]["individuals"].mean(axis=1)
-    r = stats.pearson(x, y)
-    return {"conditions": [a, b], "r": r.statistic, "p": r.p_value, "n": len(x)}
+    r = stats.fisher_r(x, y)
+    return {"conditions": [a, b], "r": r.estimate, "p": r.p, "n": len(x)}
 
 
 def individuals_vs_mean(returns: dict, condition: str = "normal") -> dict:
@@ -79,11 +79,11 @@ def individuals_vs_mean(returns: dict, condition: str = "normal") -> dict:
     same initial states, and 99% confidence intervals of both."""
     ind = returns[condition]["individuals"].mean(axis=1)
     mean_net = returns[condition]["mean_network"].mean(axis=1)
-    t = stats.paired_t(ind, mean_net)
+    t = stats.paired(ind, mean_net)
     return {
         "condition": condition,
         "t": t.statistic,
-        "p": t.p_value,
+        "p": t.p,
         "dof": t.dof,
         "individuals_ci99": stats.mean_ci(ind, 0.99),
         "mean_network_ci99": stats.mean_ci(mean_net, 0.99),
@@ -115,12 +115,12 @@ def authors_protocol(
         mean_network=True,
         stochastic=True,
     )[:, 0]
-    t = stats.one_sample_t(individuals.mean(axis=1), float(mean_network.mean()))
+    t = stats.one_sample(individuals.mean(axis=1), float(mean_network.mean()))
     return {
         "individuals": individuals,
         "mean_network": mean_network,
         "t": t.statistic,
-        "p": t.p_value,
+        "p": t.p,
         "dof": t.dof,
         "individuals_ci99": stats.mean_ci(individuals.mean(axis=1), 0.99),
         "mean_network_ci99": stats.mean_ci(mean_network, 0.99),
