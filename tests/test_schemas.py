@@ -1,5 +1,5 @@
-"""The schemas of the results files (``sgb.schemas``) refuse a committed file damaged in one
-field, naming the file and the field, and accept the nulls a reader expects."""
+"""The models of the results files (``sgb.schemas``, pydantic) refuse a committed file
+damaged in one field, naming the file and the field, and accept the nulls a reader expects."""
 
 import json
 
@@ -46,15 +46,12 @@ P_AT_LEAST = ("results", "genomes", 0, "scores", "individuals", "p_at_least")
 @pytest.mark.parametrize(
     ("name", "change", "problem"),
     [
-        (FIG5, _set((*RETURNS, 3, 1), None), r"normal\.individuals\[3\]\[1\] = null, where a"),
-        (FIG5, _set((*RETURNS, 0, 0), 1e308), r"individuals\[0\]\[0\] = 1e\+308, where a finite"),
-        (FIG5, _set((*RETURNS, 0, 0), True), r"individuals\[0\]\[0\] = true"),
-        (
-            FIG5,
-            _set((*RETURNS, 2), [1.0, 2.0]),
-            r"individuals\[2\] = \[1.0, 2.0\], where a list of 3",
-        ),
-        (FIG5, _set((*RETURNS,), []), r"individuals = \[\], where a non-empty list 2 deep"),
+        (FIG5, _set((*RETURNS, 3, 1), None), r"individuals\[3\]\[1\] = null: Input should"),
+        (FIG5, _set((*RETURNS, 0, 0), 1e308), r"individuals\[0\]\[0\] = 1e\+308: .* less than or"),
+        (FIG5, _set((*RETURNS, 0, 1), float("nan")), r"\[0\]\[1\] = NaN: Input should be a finite"),
+        (FIG5, _set((*RETURNS, 0, 0), True), r"individuals\[0\]\[0\] = true: Input should be a"),
+        (FIG5, _set((*RETURNS, 2), [1.0, 2.0]), r"individuals: row 2 has 2 entries, the first 3"),
+        (FIG5, _set((*RETURNS,), []), r"individuals = \[\]: List should have at least 1 item"),
         (
             FIG5,
             _delete(("results", "authors_protocol", "t")),
@@ -63,14 +60,18 @@ P_AT_LEAST = ("results", "genomes", 0, "scores", "individuals", "p_at_least")
         (
             FIG5,
             _set(("provenance", "wall_time_s"), -1.0),
-            r"wall_time_s = -1.0, where .* \[0, inf\]",
+            r"provenance\.wall_time_s = -1.0: Input should be greater than or equal to 0",
         ),
         (SUPERVISED, _set(("results", "records", 0, "runs", 2, "accuracy", 1), None), "= null"),
-        (SUPERVISED, _set(("results", "summary", 0, "accuracy", 0), 1.5), r"in \[0, 1\]"),
+        (
+            SUPERVISED,
+            _set(("results", "summary", 0, "accuracy", 0), 1.5),
+            r"summary\[0\]\.accuracy\[0\] = 1\.5: Input should be less than or equal to 1",
+        ),
         (
             HEDGING,
             _delete((*P_AT_LEAST, "0.5")),
-            r'no results\.genomes\[0\].*p_at_least\["0\.5"\]',
+            r"results\.genomes\[0\]\.scores\.individuals\.p_at_least: no key '0\.5'",
         ),
         ("rl/fig3_ant_cpu.json", _set(("results", "runs", 0, "cell_types"), "64"), "cell_types"),
     ],
