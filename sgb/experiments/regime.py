@@ -34,7 +34,7 @@ from sgb.profiles import check_profile
 from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
-from sgb.rl.regime_runs import RUNS, checkpoint_name, run_config
+from sgb.rl.regime_runs import RUNS, run_config
 from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem, trained_run
 
@@ -46,7 +46,7 @@ def run(profile: str, out_dir: Path) -> Path:
     config = recording.config
     for i, r in enumerate(config.runs):
         label = f"regime ant {r.label} seed {r.seed} ({i + 1}/{len(config.runs)})"
-        checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(r, profile)
+        checkpoint = Path(out_dir) / CHECKPOINT_DIR / r.checkpoint(profile)
         with runlock.claim(checkpoint) as mine:
             if not mine:
                 print(f"{label}: another process is training it", flush=True)
@@ -62,7 +62,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
     config = PROFILES[check_profile(profile)]
     runs = []
     for r in config.runs:
-        checkpoint = Path(results_dir) / CHECKPOINT_DIR / checkpoint_name(r, profile)
+        checkpoint = Path(results_dir) / CHECKPOINT_DIR / r.checkpoint(profile)
         record = finished_run(checkpoint, run_config(config, r))
         runs.append(
             QueuedRun(
@@ -84,7 +84,7 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
     config = recording.config
     runs = []
     for r in config.runs:
-        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(r, recording.profile)
+        checkpoint = out_dir / CHECKPOINT_DIR / r.checkpoint(recording.profile)
         record = finished_run(checkpoint, run_config(config, r))
         if record is not None:
             scaled = authors_scale("ant", record["final_return"])
