@@ -1,6 +1,7 @@
 """Figure 3-5 experiment logic: sweep summaries, correlations, paired tests, profiles."""
 
 import re
+import threading
 from collections import Counter
 from dataclasses import replace
 
@@ -191,3 +192,37 @@ def test_spread_run_trains_and_evaluates_wider_genomes(tmp_path, monkeypatch):
     assert wide["sigma_trained"] > 10 * narrow["sigma_trained"]
     # wider genomes make more diverse individuals
     assert wide["individuals_sd"] > narrow["individuals_sd"]
+
+
+def test_the_run_loop_trains_the_runs_no_other_process_holds_and_writes_after_each(
+    tmp_path, monkeypatch, capsys
+):
+    from sgb import runlock
+    from sgb.rl import runs as rl_runs
+
+    events = []
+
+    def trained(ppo, seed, checkpoint, profile, label):
+        events.append(label)
+        return checkpoint.name != "reused"
+
+    monkeypatch.setattr(rl_runs, "trained_run", trained)
+    planned = [(name, None, 0, tmp_path / name) for name in ("a", "held", "reused", "b")]
+    taken, done = threading.Event(), threading.Event()
+
+    def other():  # another holder: a thread of this process is refused a lock as one
+        with runlock.claim(tmp_path / "held"):
+            taken.set()
+            done.wait()
+
+    holder = threading.Thread(target=other)
+    holder.start()
+    taken.wait()
+    try:
+        written = rl_runs.train_runs(planned, "smoke", lambda: events.append("write") or "file")
+    finally:
+        done.set()
+        holder.join()
+    assert written == "file"
+    assert events == ["a (1/4)", "write", "reused (3/4)", "b (4/4)", "write", "write"]
+    assert "held (2/4): another process is training it" in capsys.readouterr().out
