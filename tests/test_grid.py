@@ -90,7 +90,7 @@ def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, m
     stopped; landed again, the finished run replaces its state."""
     config = regime_runs.RUNS["smoke"]
     vanilla = regime_runs.run_config(config, config.runs[0])
-    name = regime_runs.checkpoint_name(config.runs[0], "smoke")
+    name = config.runs[0].checkpoint("smoke")
     uninterrupted = tmp_path / "uninterrupted"
     regime.run("smoke", uninterrupted)
 

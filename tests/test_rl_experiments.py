@@ -1,5 +1,7 @@
 """Figure 3-5 experiment logic: sweep summaries, correlations, paired tests, profiles."""
 
+import re
+import threading
 from collections import Counter
 from dataclasses import replace
 
@@ -8,10 +10,12 @@ import pytest
 from reach import EPISODE, SHARED_STEP, shared_step_config
 
 from sgb.experiments import fig3, fig4_5, get_experiment, rl_spread
+from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.rl import protocols
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.protocols import population_config
+from sgb.rl.regime_runs import RUNS, RegimeRun
 from sgb.rl.regimes import with_settings
 from sgb.rl.runs import checkpoint_name
 from sgb.rl.sweep import sweep_config
@@ -55,6 +59,51 @@ def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
     assert typed == replace(net16, network=replace(net16.network, typed_inputs=True))
     names = {checkpoint_name("ant", k, seed, "cpu", s) for s, k, seed in runs}
     assert len(names) == len(runs)
+
+
+def test_the_one_checkpoint_name_gives_every_committed_checkpoint_its_name():
+    """Figure 3's, the spread sweep's and the regime's committed runs: each run's recorded
+    checkpoint is the name ``checkpoint_name`` makes from its config, and every committed
+    checkpoint, and every one a results file names, is the name of a run of a cpu config."""
+    results = committed_results()
+    recorded = {}
+    for env in ("ant", "halfcheetah"):
+        runs = read_results(results / "rl" / f"fig3_{env}_cpu.json")["results"]["runs"]
+        planned = set(fig3.sweep_runs(sweep_config(env, "cpu")))
+        for r in runs:
+            assert (r["settings"], r["cell_types"], r["seed"]) in planned
+            name = checkpoint_name(env, r["cell_types"], r["seed"], "cpu", r["settings"])
+            recorded[name] = r["checkpoint"]
+    spread = rl_spread.PROFILES["cpu"]
+    for r in read_results(results / "rl" / "spread_ant_cpu.json")["results"]["runs"]:
+        types = spread.ppo.network.cell_types
+        name = checkpoint_name("ant", types, r["seed"], "cpu", rho_init=r["rho_init"])
+        recorded[name] = r["checkpoint"]
+    for r in read_results(results / "rl" / "regime_ant_cpu.json")["results"]["runs"]:
+        run = RegimeRun(r["cell_types"], r["seed"], r["genome"])
+        assert run in RUNS["cpu"].runs
+        recorded[run.checkpoint("cpu")] = r["checkpoint"]
+    assert recorded and all(made == kept for made, kept in recorded.items())
+    assert "ant_regime_vanilla_s0_cpu.msgpack" in recorded
+    made = {
+        checkpoint_name(e, k, seed, "cpu", s)
+        for e in ("ant", "halfcheetah")
+        for s, k, seed in fig3.sweep_runs(sweep_config(e, "cpu"))
+    }
+    made |= {
+        checkpoint_name("ant", spread.ppo.network.cell_types, seed, "cpu", rho_init=rho)
+        for rho in spread.rho_inits
+        for seed in spread.seeds
+    }
+    made |= {r.checkpoint("cpu") for r in RUNS["cpu"].runs}
+    committed = {p.name for p in (results / "rl" / "checkpoints").glob("*.msgpack")}
+    named = {
+        name
+        for path in results.rglob("*.json")
+        for name in re.findall(r"[\w.-]+_s\d+_(?:smoke|cpu|paper)\.msgpack", path.read_text())
+    }
+    assert committed and committed <= made
+    assert named <= committed
 
 
 def test_correlation_and_paired_test_on_known_populations():
@@ -143,3 +192,37 @@ def test_spread_run_trains_and_evaluates_wider_genomes(tmp_path, monkeypatch):
     assert wide["sigma_trained"] > 10 * narrow["sigma_trained"]
     # wider genomes make more diverse individuals
     assert wide["individuals_sd"] > narrow["individuals_sd"]
+
+
+def test_the_run_loop_trains_the_runs_no_other_process_holds_and_writes_after_each(
+    tmp_path, monkeypatch, capsys
+):
+    from sgb import runlock
+    from sgb.rl import runs as rl_runs
+
+    events = []
+
+    def trained(ppo, seed, checkpoint, profile, label):
+        events.append(label)
+        return checkpoint.name != "reused"
+
+    monkeypatch.setattr(rl_runs, "trained_run", trained)
+    planned = [(name, None, 0, tmp_path / name) for name in ("a", "held", "reused", "b")]
+    taken, done = threading.Event(), threading.Event()
+
+    def other():  # another holder: a thread of this process is refused a lock as one
+        with runlock.claim(tmp_path / "held"):
+            taken.set()
+            done.wait()
+
+    holder = threading.Thread(target=other)
+    holder.start()
+    taken.wait()
+    try:
+        written = rl_runs.train_runs(planned, "smoke", lambda: events.append("write") or "file")
+    finally:
+        done.set()
+        holder.join()
+    assert written == "file"
+    assert events == ["a (1/4)", "write", "reused (3/4)", "b (4/4)", "write", "write"]
+    assert "held (2/4): another process is training it" in capsys.readouterr().out

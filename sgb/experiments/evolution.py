@@ -21,9 +21,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from tqdm.auto import tqdm
-
 from sgb import validation
+from sgb.cells import train_cells
 from sgb.compression import compression
 from sgb.data import DATASETS, load
 from sgb.evolution import EvolutionConfig, evolve
@@ -91,16 +90,17 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     provenance after each."""
     recording = start(PROFILES, profile, out_dir, lambda sweep: f"evolution_{sweep.dataset}")
     sweep = recording.config
-    records = list(recording.earlier().get("records", []))
-    done = {(r["hidden_types"], r["stochastic"], r["seed"]) for r in records}
-    todo = [cell for cell in sweep.cells() if _key(cell) not in done]
     data = load(sweep.dataset, seed=0)
-    for cell in tqdm(todo, desc=f"evolution {sweep.dataset}", disable=not progress):
-        records.append(run_cell(cell, data))
-        _write(recording, records)
-    if not recording.path.exists():
-        _write(recording, records)
-    return recording.path
+    return train_cells(
+        recording.path,
+        sweep.cells(),
+        list(recording.earlier().get("records", [])),
+        (_key, lambda r: (r["hidden_types"], r["stochastic"], r["seed"])),
+        lambda cell: run_cell(cell, data),
+        lambda records: _write(recording, records),
+        f"evolution {sweep.dataset}",
+        progress,
+    )
 
 
 def _write(recording: Recording, records: list[dict]) -> Path:

@@ -23,8 +23,7 @@ type pair is the main setting and per synapse the ablation.
 
 from pathlib import Path
 
-from tqdm.auto import tqdm
-
+from sgb.cells import train_cells
 from sgb.classifiers import dense_sizes
 from sgb.data import load
 from sgb.recording import Recording, start
@@ -47,35 +46,42 @@ def run(
     recording = start(PROFILES, profile, out_dir, f"fig2_{dataset}", choice=dataset)
     sweep, ablation = recording.config["sweep"], recording.config["ablation"]
     earlier = recording.earlier()
-    done = {k: list(earlier.get(k, [])) for k in ("records", "ablation_records")}
     data = load(dataset, seed=0)
     sizes = dense_sizes(data.x_train.shape[1:], sweep.conv_features, sweep.hidden, data.num_classes)
     groups = {"records": sweep, "ablation_records": ablation}
-    todo = [
+    cells = [
         (group, cell)
         for group, part in groups.items()
         if part is not None
         for cell in sweep_cells(part, sizes)
-        if (models is None or cell[0] in models)
-        and (seeds is None or cell[2] in seeds)
-        and cell not in {(r["model"], r["setting"], r["seed"]) for r in done[group]}
+        if (models is None or cell[0] in models) and (seeds is None or cell[2] in seeds)
     ]
-    finished = sum(len(records) for records in done.values())
-    if progress and finished:
-        print(
-            f"fig2 {dataset}: reusing the {finished} cells already in {recording.path}; "
-            f"{len(todo)} left to train",
-            flush=True,
-        )
-    for group, (kind, setting, seed) in tqdm(todo, desc=f"{dataset}", disable=not progress):
-        done[group].append(run_one(kind, setting, seed, data, groups[group]))
-        _write(recording, dataset, sizes, done)
-    if not recording.path.exists():
-        _write(recording, dataset, sizes, done)
-    return recording.path
+
+    def train(item: tuple[str, tuple[str, int, int]]) -> tuple[str, dict]:
+        group, (kind, setting, seed) = item
+        return group, run_one(kind, setting, seed, data, groups[group])
+
+    return train_cells(
+        recording.path,
+        cells,
+        [(group, r) for group in groups for r in earlier.get(group, [])],
+        (lambda item: item, lambda kept: (kept[0], _cell(kept[1]))),
+        train,
+        lambda kept: _write(recording, dataset, sizes, kept),
+        f"fig2 {dataset}",
+        progress,
+    )
 
 
-def _write(recording: Recording, dataset: str, sizes: tuple[int, ...], done: dict) -> Path:
+def _cell(record: dict) -> tuple[str, int, int]:
+    return record["model"], record["setting"], record["seed"]
+
+
+def _write(
+    recording: Recording, dataset: str, sizes: tuple[int, ...], kept: list[tuple[str, dict]]
+) -> Path:
+    """Write the records ``kept`` (group, record), each group in its list."""
+    done = {g: [r for h, r in kept if h == g] for g in ("records", "ablation_records")}
     records = done["records"]
     results = {"dataset": dataset, "sizes": list(sizes), **done, **sweep_summary(records)}
     seeds = recording.config["sweep"].seeds

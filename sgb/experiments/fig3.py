@@ -11,14 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
-from sgb import runlock
 from sgb.profiles import PROFILE_NAMES
 from sgb.provenance import read_results
 from sgb.recording import Recording, start
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import with_settings
-from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, finished_run, seed_sem, trained_run
+from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, finished_run, seed_sem, train_runs
 from sgb.rl.sweep import BACKENDS, CellTypeSweep, sweep_config
 
 
@@ -45,19 +44,16 @@ def run_fig3(profile: str, out_dir: Path, env: str = "ant") -> Path:
         raise ValueError(f"env must be one of {sorted(BACKENDS)}, got {env!r}")
     recording = start(FIG3_PROFILES, profile, Path(out_dir) / "rl", f"fig3_{env}", choice=env)
     config = recording.config
-    planned = sweep_runs(config)
-    for i, (settings, k, seed) in enumerate(planned):
-        label = f"fig3 {env} {settings} k={k} seed {seed} ({i + 1}/{len(planned)})"
-        checkpoint = (
-            Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile, settings)
+    runs = [
+        (
+            f"fig3 {env} {settings} k={k} seed {seed}",
+            run_config(config, settings, k),
+            seed,
+            Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(env, k, seed, profile, settings),
         )
-        with runlock.claim(checkpoint) as mine:
-            if not mine:
-                print(f"{label}: another process is training it", flush=True)
-                continue
-            if trained_run(run_config(config, settings, k), seed, checkpoint, profile, label):
-                write_sweep(recording, Path(out_dir))
-    return write_sweep(recording, Path(out_dir))
+        for settings, k, seed in sweep_runs(config)
+    ]
+    return train_runs(runs, profile, lambda: write_sweep(recording, Path(out_dir)))
 
 
 def run_config(config: CellTypeSweep, settings: str, cell_types: int | None) -> PPOConfig:

@@ -35,9 +35,9 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 import numpy as np
-from tqdm.auto import tqdm
 
 from sgb import validation
+from sgb.cells import train_cells
 from sgb.classifiers import DenseClassifier, dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
@@ -205,15 +205,17 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
         PROFILES, profile, out_dir, lambda config: f"innate_start_supervised_{config.dataset}"
     )
     config = recording.config
-    records = list(recording.earlier().get("records", []))
-    done = {r["seed"] for r in records}
     data = load(config.dataset, seed=0)
-    for seed in tqdm([s for s in config.seeds if s not in done], disable=not progress):
-        records.append(run_seed(config, data, seed))
-        _write(recording, records)
-    if not recording.path.exists():
-        _write(recording, records)
-    return recording.path
+    return train_cells(
+        recording.path,
+        config.seeds,
+        list(recording.earlier().get("records", [])),
+        (lambda seed: seed, lambda r: r["seed"]),
+        lambda seed: run_seed(config, data, seed),
+        lambda records: _write(recording, records),
+        f"innate start supervised {config.dataset}",
+        progress,
+    )
 
 
 def _write(recording: Recording, records: list[dict]) -> Path:

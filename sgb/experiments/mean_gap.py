@@ -33,9 +33,9 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
-from tqdm.auto import tqdm
 
 from sgb import moments, validation
+from sgb.cells import train_cells
 from sgb.classifiers import dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
@@ -235,17 +235,18 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
     the file with provenance after each."""
     recording = start(PROFILES, profile, out_dir, lambda config: f"mean_gap_{config.dataset}")
     config = recording.config
-    records = list(recording.earlier().get("records", []))
     data = load(config.dataset, seed=0)
     sizes = dense_sizes(data.x_train.shape[1:], (), config.sweep.hidden, data.num_classes)
-    done = {(r["setting"], r["rho_init"], r["seed"]) for r in records}
-    todo = [cell for cell in cells(config, sizes) if cell not in done]
-    for setting, rho, seed in tqdm(todo, desc="mean gap", disable=not progress):
-        records.append(run_cell(setting, rho, seed, data, config.sweep))
-        _write(recording, sizes, records)
-    if not recording.path.exists():
-        _write(recording, sizes, records)
-    return recording.path
+    return train_cells(
+        recording.path,
+        cells(config, sizes),
+        list(recording.earlier().get("records", [])),
+        (lambda cell: cell, lambda r: (r["setting"], r["rho_init"], r["seed"])),
+        lambda cell: run_cell(*cell, data, config.sweep),
+        lambda records: _write(recording, sizes, records),
+        "mean gap",
+        progress,
+    )
 
 
 def _write(recording: Recording, sizes: tuple[int, ...], records: list[dict]) -> Path:

@@ -61,7 +61,6 @@ from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
-from sgb.rl import regime_runs
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
@@ -95,11 +94,9 @@ class Genome:
 
     def checkpoint(self, profile: str, env: str = "ant") -> str:
         """The file name of its checkpoint, trained at ``profile``."""
-        if self.regime:
-            return regime_runs.checkpoint_name(
-                regime_runs.RegimeRun(self.cell_types, self.seed), profile
-            )
-        return checkpoint_name(env, self.cell_types, self.seed, profile, self.settings)
+        return checkpoint_name(
+            env, self.cell_types, self.seed, profile, self.settings, regime=self.regime
+        )
 
 
 @dataclass(frozen=True)

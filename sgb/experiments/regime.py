@@ -20,7 +20,7 @@ The runs train in the order Figure 3C needs them: vanilla, 128 and 16 types at s
 types (does their aliasing move the fall?). Three seeds decide the fall (an SD of 1,500
 between seeds gives t near 7.7 for a fall of 6,700); more seeds join only where an
 interval cannot yet decide its claim. They are resumable and
-shared between processes as Figure 3's are (``sgb.rl.runs.trained_run``,
+shared between processes as Figure 3's are (``sgb.rl.runs.train_runs``,
 ``sgb.runlock``); after every run the results file is written again from every finished
 checkpoint (``"complete": false`` until all are).
 """
@@ -29,14 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
-from sgb import runlock
 from sgb.profiles import check_profile
 from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
-from sgb.rl.regime_runs import RUNS, checkpoint_name, run_config
+from sgb.rl.regime_runs import RUNS, run_config
 from sgb.rl.regimes import authors_scale
-from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem, trained_run
+from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem, train_runs
 
 
 def run(profile: str, out_dir: Path) -> Path:
@@ -44,16 +43,16 @@ def run(profile: str, out_dir: Path) -> Path:
     after each."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_ant")
     config = recording.config
-    for i, r in enumerate(config.runs):
-        label = f"regime ant {r.label} seed {r.seed} ({i + 1}/{len(config.runs)})"
-        checkpoint = Path(out_dir) / CHECKPOINT_DIR / checkpoint_name(r, profile)
-        with runlock.claim(checkpoint) as mine:
-            if not mine:
-                print(f"{label}: another process is training it", flush=True)
-                continue
-            if trained_run(run_config(config, r), r.seed, checkpoint, profile, label):
-                write_regime(recording, Path(out_dir))
-    return write_regime(recording, Path(out_dir))
+    runs = [
+        (
+            f"regime ant {r.label} seed {r.seed}",
+            run_config(config, r),
+            r.seed,
+            Path(out_dir) / CHECKPOINT_DIR / r.checkpoint(profile),
+        )
+        for r in config.runs
+    ]
+    return train_runs(runs, profile, lambda: write_regime(recording, Path(out_dir)))
 
 
 def queued(profile: str, results_dir: Path) -> Queue:
@@ -62,7 +61,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
     config = PROFILES[check_profile(profile)]
     runs = []
     for r in config.runs:
-        checkpoint = Path(results_dir) / CHECKPOINT_DIR / checkpoint_name(r, profile)
+        checkpoint = Path(results_dir) / CHECKPOINT_DIR / r.checkpoint(profile)
         record = finished_run(checkpoint, run_config(config, r))
         runs.append(
             QueuedRun(
@@ -84,7 +83,7 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
     config = recording.config
     runs = []
     for r in config.runs:
-        checkpoint = out_dir / CHECKPOINT_DIR / checkpoint_name(r, recording.profile)
+        checkpoint = out_dir / CHECKPOINT_DIR / r.checkpoint(recording.profile)
         record = finished_run(checkpoint, run_config(config, r))
         if record is not None:
             scaled = authors_scale("ant", record["final_return"])

@@ -28,7 +28,7 @@ from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.rl import checkpoints
 from sgb.rl.ppo import PPOConfig
-from sgb.rl.regime_runs import RUNS, RegimeRun, checkpoint_name, run_config
+from sgb.rl.regime_runs import RUNS, RegimeRun, run_config
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_root, finished_run
 from sgb.rl.trainer import make_trainer
 
@@ -81,7 +81,7 @@ def run(profile: str, out_dir: Path) -> Path:
     for i, r in enumerate(regime.runs):
         if (r.cell_types, r.seed, r.genome) in done:
             continue
-        name = str(Path(CHECKPOINT_DIR) / checkpoint_name(r, config.regime_profile))
+        name = str(Path(CHECKPOINT_DIR) / r.checkpoint(config.regime_profile))
         checkpoint = checkpoint_root(Path(out_dir), name) / name
         if finished_run(checkpoint, run_config(regime, r)) is None:
             continue

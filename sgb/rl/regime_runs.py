@@ -8,6 +8,7 @@ from sgb import validation
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_regime, with_settings
+from sgb.rl.runs import checkpoint_name
 from sgb.rl.sweep import ppo_settings
 
 GENOMES = ("authors", "authors_aliased")  # a Gaussian per type pair; their aliased layers
@@ -38,6 +39,13 @@ class RegimeRun:
         if self.cell_types is None:
             return "vanilla"
         return f"k{self.cell_types}" + ("_aliased" if self.genome == "authors_aliased" else "")
+
+    def checkpoint(self, profile: str) -> str:
+        """File name of its checkpoint at ``profile`` (``sgb.rl.runs.checkpoint_name``)."""
+        aliased = self.genome == "authors_aliased"
+        return checkpoint_name(
+            "ant", self.cell_types, self.seed, profile, "authors", regime=True, aliased=aliased
+        )
 
 
 @dataclass(frozen=True)
@@ -95,11 +103,6 @@ def run_config(config: RegimeRuns, run: RegimeRun) -> PPOConfig:
     ppo = with_settings(ppo, "authors")
     aliased = run.genome == "authors_aliased"
     return replace(ppo, network=replace(ppo.network, aliased_pairs=aliased))
-
-
-def checkpoint_name(run: RegimeRun, profile: str) -> str:
-    """File name of ``run``'s checkpoint at ``profile``."""
-    return f"ant_regime_{run.label}_s{run.seed}_{profile}.msgpack"
 
 
 RUNS = {p: regime_config(p) for p in PROFILE_NAMES}

@@ -1,13 +1,16 @@
-"""An RL run's checkpoint: its name (``checkpoint_name``), where it lies (a results
+"""An RL run's checkpoint: its name (``checkpoint_name``, the one name of every run's
+checkpoint: Figure 3, the spread sweep, the regime), where it lies (a results
 directory or the committed results, ``checkpoint_root``), training the run once
-(``trained_run``: resumable, and reused where the checkpoint holds its settings) and
+(``trained_run``: resumable, and reused where the checkpoint holds its settings), the
+one loop over a sweep's runs (``train_runs``: each process the runs no other holds) and
 reading its record back (``finished_run``); the SEM over a summary's seeds."""
 
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from sgb import stats, validation
+from sgb import runlock, stats, validation
 from sgb.paths import committed_results
 from sgb.provenance import provenance
 from sgb.rl import checkpoints
@@ -24,14 +27,26 @@ def checkpoint_name(
     profile: str,
     settings: str = "ours",
     rho_init: float = NetworkConfig.rho_init,
+    regime: bool = False,
+    aliased: bool = False,
 ) -> str:
-    """File name of one run's checkpoint (Figure 3; ``rho_init``: the spread sweep)."""
+    """File name of one run's checkpoint, the one name of every RL run:
+    ``<env>[_regime]_<vanilla|k<cell_types>>[_<settings>][_aliased][_rho<rho_init>]_s<seed>_<profile>.msgpack``.
+
+    ``regime``: trained under the authors' regime at the paper's budget
+    (``sgb.rl.regime_runs``), whose own genome settings are the authors'; under ours
+    (Figure 3, the spread sweep) they are ours. ``settings`` is named where it is not the
+    regime's own, ``aliased`` (the authors' aliased type pairs) where set and ``rho_init``
+    where it is not ``NetworkConfig``'s (the spread sweep)."""
     label = "vanilla" if cell_types is None else f"k{cell_types}"
-    if settings != "ours":
+    if settings != ("authors" if regime else "ours"):
         label += f"_{settings}"
+    if aliased:
+        label += "_aliased"
     if rho_init != NetworkConfig.rho_init:
         label += f"_rho{rho_init:g}"
-    return f"{env}_{label}_s{seed}_{profile}.msgpack"
+    prefix = f"{env}_regime" if regime else env
+    return f"{prefix}_{label}_s{seed}_{profile}.msgpack"
 
 
 def checkpoint_root(out_dir: Path, checkpoint: str) -> Path:
@@ -52,6 +67,26 @@ def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str, label
     checkpoints.save(checkpoint, result, provenance(ppo, profile, [seed], result.wall_time_s))
     state_file.unlink()
     return True
+
+
+def train_runs(
+    runs: Sequence[tuple[str, PPOConfig, int, Path]],
+    profile: str,
+    write: Callable[[], Path],
+) -> Path:
+    """Train each of ``runs`` (a label, its settings, seed and checkpoint), in order, that
+    no other process holds (``sgb.runlock``), each once (``trained_run``), calling
+    ``write`` (the results file from every finished checkpoint) after each run trained
+    and once at the end; returns what that last ``write`` returns."""
+    for i, (label, ppo, seed, checkpoint) in enumerate(runs):
+        label = f"{label} ({i + 1}/{len(runs)})"
+        with runlock.claim(checkpoint) as mine:
+            if not mine:
+                print(f"{label}: another process is training it", flush=True)
+                continue
+            if trained_run(ppo, seed, checkpoint, profile, label):
+                write()
+    return write()
 
 
 def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
