@@ -27,6 +27,7 @@ from sgb.priors import PRIOR_TYPES, GaussianPrior, Prior
 KLCounting = Literal["synapse", "table"]
 KL_COUNTINGS = ("synapse", "table")
 SOFTPLUS_LIMIT = 88.0  # the largest x whose exp(x) float32 holds with room to spare
+KL_INDEX = 2**32 - 1  # the fold-in of an individual's KL key (``kl_key``), never a layer's
 
 
 class LayerGenome(NamedTuple):
@@ -176,14 +177,27 @@ def draw_layer_noise(key: jax.Array, shape: Sequence[int]) -> jnp.ndarray:
     return standard_normal(key, tuple(shape))
 
 
+def layer_key(key: jax.Array, index: int) -> jax.Array:
+    """The key of drawn layer ``index`` (0, 1, ... input to output) of the individual born
+    from ``key``: ``fold_in(key, index)``, which is ``jax.random.split(key, n)[index]``
+    for every n > index (JAX's partitionable threefry, its default). The one derivation
+    of an individual's layers, for ``draw_noise`` and the SGB layers (``sgb.layers``)."""
+    return jax.random.fold_in(key, index)
+
+
+def kl_key(key: jax.Array) -> jax.Array:
+    """The key the SGB layers of the individual born from ``key`` draw their Monte Carlo
+    KL from (``kl``'s key): ``fold_in(key, KL_INDEX)``, apart from every layer's key."""
+    return jax.random.fold_in(key, KL_INDEX)
+
+
 def draw_noise(key: jax.Array, shapes: Shapes) -> Noise:
     """An individual's noise: per layer of ``shapes``, ``draw_layer_noise`` with its own
-    key, the layers' keys ``jax.random.split(key, len(shapes))`` in order. vmap it over keys
-    for many individuals (a leading axis N on every layer)."""
-    keys = jax.random.split(key, len(shapes))
+    key, layer i's ``layer_key(key, i)`` in order. vmap it over keys for many individuals
+    (a leading axis N on every layer)."""
     return {
-        name: draw_layer_noise(k, shape)
-        for (name, shape), k in zip(shapes.items(), keys, strict=True)
+        name: draw_layer_noise(layer_key(key, i), shape)
+        for i, (name, shape) in enumerate(shapes.items())
     }
 
 
@@ -204,15 +218,14 @@ def kl(
     genome: Genome, shapes: Shapes, prior: Prior, key: jax.Array, counting: KLCounting = "synapse"
 ) -> jnp.ndarray:
     """The genome's KL to ``prior``, a scalar (nats): ``layer_kl`` summed over the layers
-    of ``shapes``, each with its key of ``jax.random.split(key, len(shapes))``; 0 for none."""
+    of ``shapes``, layer i's with ``layer_key(key, i)``; 0 for none."""
     layers = _layers(genome, shapes, "shapes")
     validation.prng_key("key", key)
     if not shapes:
         return jnp.zeros(())
-    keys = jax.random.split(key, len(shapes))
     return sum(
-        layer_kl(prior, layers[name].mu, sigma(layers[name]), shape, counting, k)
-        for (name, shape), k in zip(shapes.items(), keys, strict=True)
+        layer_kl(prior, layers[name].mu, sigma(layers[name]), shape, counting, layer_key(key, i))
+        for i, (name, shape) in enumerate(shapes.items())
     )
 
 

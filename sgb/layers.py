@@ -3,8 +3,12 @@
 A layer holds a type table ``mu`` and ``rho`` (sigma = softplus(rho)) and per-neuron
 biases; ``sgb.genome`` holds the functions that develop a kernel from them and reads
 them back (``sgb.genome.of_params``). Each call draws every synapse's weight
-independently from its type pair's Gaussian, using the ``"sample"`` PRNG stream, or uses
-the means alone when ``mean_network=True``. The KL term of the layer is sown into
+independently from its type pair's Gaussian, or uses the means alone when
+``mean_network=True``. The ``"sample"`` key a model is applied with is the individual's
+key: a layer of ``index`` i draws its noise from ``sgb.genome.layer_key(key, i)`` and its
+Monte Carlo KL from ``layer_key(kl_key(key), i)``, as ``sgb.genome.draw_noise`` and
+``sgb.genome.kl`` do, so one key gives one individual on both paths (the layers of one
+model need distinct indices; ``SGBMLP`` numbers its own). The KL term of the layer is sown into
 the ``"losses"`` collection and the drawn kernel and its standard normal
 noise into ``"individual"`` (each apply replaces what an earlier one sowed).
 ``sgb.individuals.init_params`` initialises a model's parameters alone.
@@ -34,6 +38,8 @@ from sgb.genome import (
     KLCounting,
     draw_layer_noise,
     individual_kernel,
+    kl_key,
+    layer_key,
     layer_kl,
     softplus,
 )
@@ -117,6 +123,15 @@ def _individual_matmul_backward(residuals, grad):
 individual_matmul.defvjp(_individual_matmul_forward, _individual_matmul_backward)
 
 
+def _individual_key(module: nn.Module) -> jax.Array:
+    """The ``"sample"`` key the model was applied with (``"params"``'s without one, as
+    ``make_rng`` falls back): the key of the individual it draws."""
+    name = "sample" if module.has_rng("sample") else "params"
+    if not module.has_rng(name):
+        raise ValueError('an SGB layer draws its weights from the "sample" PRNG stream')
+    return module.scope.rngs[name].rng
+
+
 def _replace(_previous, new):
     """Sow reducer that keeps only the latest value, so repeated applies never accumulate."""
     return new
@@ -134,7 +149,8 @@ def _rho_initializer(mean: float, std: float):
 
 
 class _GenomeKernel(nn.Module):
-    """Samples a kernel of ``shape`` from a type table of ``types``; sows its KL."""
+    """Samples a kernel of ``shape`` from a type table of ``types``; sows its KL. ``index``:
+    its place among the model's drawn layers (``sgb.genome.layer_key``)."""
 
     shape: tuple[int, ...]
     types: tuple[int, ...]
@@ -143,6 +159,7 @@ class _GenomeKernel(nn.Module):
     mean_init_std: float
     rho_init: float
     rho_init_std: float = 0.0
+    index: int = 0
 
     @nn.compact
     def __call__(
@@ -160,7 +177,7 @@ class _GenomeKernel(nn.Module):
         if mean_network:
             kernel = expand_table(mu, self.shape)
         else:
-            noise = draw_layer_noise(self.make_rng("sample"), self.shape)
+            noise = draw_layer_noise(layer_key(_individual_key(self), self.index), self.shape)
             kernel = individual_kernel(mu, rho, noise)
             self._sow_kl(mu, sigma)
             self.sow("individual", "noise", noise, init_fn=lambda: None, reduce_fn=_replace)
@@ -168,13 +185,14 @@ class _GenomeKernel(nn.Module):
         return kernel
 
     def _sow_kl(self, mu: jnp.ndarray, sigma: jnp.ndarray) -> None:
-        key = self.make_rng("sample")
+        key = layer_key(kl_key(_individual_key(self)), self.index)
         kl = layer_kl(self.prior, mu, sigma, self.shape, self.kl_counting, key)
         self.sow("losses", "kl", kl, init_fn=lambda: None, reduce_fn=_replace)
 
 
 class _BayesianBias(nn.Module):
-    """Biases (features,) drawn per neuron from a genome of shape (1, features)."""
+    """Biases (features,) drawn per neuron from a genome of shape (1, features), the
+    model's drawn layer ``index``."""
 
     features: int
     prior: Prior
@@ -182,6 +200,7 @@ class _BayesianBias(nn.Module):
     mean_init_std: float
     rho_init: float
     rho_init_std: float = 0.0
+    index: int = 0
 
     @nn.compact
     def __call__(self, mean_network: bool) -> jnp.ndarray:
@@ -194,6 +213,7 @@ class _BayesianBias(nn.Module):
             self.mean_init_std,
             self.rho_init,
             self.rho_init_std,
+            self.index,
             name="genome",
         )
         return genome(mean_network)[0]
@@ -210,7 +230,8 @@ class SGBDense(nn.Module):
     path + ``/bias``, means starting with the kernel means' standard deviation), as the
     authors' RL layers do (``RL/custom_layers.py``); otherwise they are plain parameters.
     Every raw spread starts at ``rho_init`` plus N(0, ``rho_init_std``^2) (exactly
-    ``rho_init`` at the default 0).
+    ``rho_init`` at the default 0). ``index``: the kernel's place among the model's drawn
+    layers (``sgb.genome.layer_key``), the Bayesian biases' ``index + 1``.
     """
 
     features: int
@@ -223,9 +244,11 @@ class SGBDense(nn.Module):
     in_features: int | None = None
     bayesian_bias: bool = False
     rho_init_std: float = 0.0
+    index: int = 0
 
     def __post_init__(self) -> None:
         validation.integer("features", self.features)
+        validation.integer("index", self.index, minimum=0)
         validation.non_negative("rho_init_std", self.rho_init_std)
         validation.instance("bayesian_bias", self.bayesian_bias, bool)
         for name in ("in_types", "out_types", "in_features"):
@@ -252,6 +275,7 @@ class SGBDense(nn.Module):
             mean_init_std=self.mean_init_std / n_in**0.5,
             rho_init=self.rho_init,
             rho_init_std=self.rho_init_std,
+            index=self.index,
             name="genome",
         )
         if self.bayesian_bias:
@@ -264,6 +288,7 @@ class SGBDense(nn.Module):
                 self.mean_init_std / n_in**0.5,
                 self.rho_init,
                 self.rho_init_std,
+                self.index + 1,
                 name="bias",
             )(mean_network)
         else:
@@ -280,7 +305,8 @@ class SGBDense(nn.Module):
 
 
 class SGBConv(nn.Module):
-    """2-D convolution, NHWC, with a 4-D genome: types along (height, width, c_in, c_out)."""
+    """2-D convolution, NHWC, with a 4-D genome: types along (height, width, c_in, c_out);
+    ``index`` its place among the model's drawn layers (``sgb.genome.layer_key``)."""
 
     features: int
     kernel_size: tuple[int, int]
@@ -291,9 +317,11 @@ class SGBConv(nn.Module):
     kl_counting: KLCounting = "synapse"
     mean_init_std: float = 1.0
     rho_init: float = -5.0
+    index: int = 0
 
     def __post_init__(self) -> None:
         validation.integer("features", self.features)
+        validation.integer("index", self.index, minimum=0)
         if len(validation.integers("kernel_size", self.kernel_size)) != 2:
             raise ValueError(f"kernel_size must have 2 entries, got {self.kernel_size}")
         if len(validation.integers("types", self.types)) != 4:
@@ -320,6 +348,7 @@ class SGBConv(nn.Module):
             kl_counting=self.kl_counting,
             mean_init_std=self.mean_init_std / fan_in**0.5,
             rho_init=self.rho_init,
+            index=self.index,
             name="genome",
         )(mean_network)
         y = jax.lax.conv_general_dilated(
@@ -337,6 +366,7 @@ class SGBMLP(nn.Module):
     len(widths) + 1, e.g. (30, 64, 10); ``None`` entries mean one type per neuron.
     ``in_features``: the input width, checked on every call when given (every model the
     package builds gives it); each further layer checks the width of the one before.
+    Layer i is the model's drawn layer i (``sgb.genome.layer_key``).
     """
 
     widths: Sequence[int]
@@ -376,6 +406,7 @@ class SGBMLP(nn.Module):
                 kl_counting=self.kl_counting,
                 rho_init=self.rho_init,
                 in_features=self.in_features if i == 0 else self.widths[i - 1],
+                index=i,
             )(x, mean_network, local_reparam)
             if i < len(self.widths) - 1:
                 x = nn.relu(x)

@@ -101,3 +101,23 @@ def test_the_kl_of_a_genome_is_the_sum_of_its_layers_and_matches_monte_carlo():
     draws = np.asarray(jax.jit(jax.vmap(log_ratio))(keys))
     se = draws.std() / np.sqrt(len(draws))
     assert abs(draws.mean() - float(total)) < 4 * se
+
+
+def test_an_individuals_layer_keys_are_the_splits_the_rl_births_were_drawn_with():
+    """``layer_key(key, i)`` is ``split(key, n)[i]`` for any n > i, so ``draw_noise`` and
+    ``kl`` draw exactly what they drew with ``split(key, len(shapes))`` (the committed RL
+    results' births and KLs), for raw and typed keys alike; the KL's key is neither."""
+    shapes = {"a": (5, 3), "a/bias": (1, 3), "b": (3, 3), "out": (3, 2)}
+    for key in (jax.random.PRNGKey(11), jax.random.key(12)):
+        for n in (4, 5, 9):
+            for i, k in enumerate(jax.random.split(key, n)[:4]):
+                np.testing.assert_array_equal(
+                    jax.random.key_data(genome.layer_key(key, i)), jax.random.key_data(k)
+                )
+        old = jax.random.split(key, len(shapes))
+        noise = genome.draw_noise(key, shapes)
+        for (name, shape), k in zip(shapes.items(), old, strict=True):
+            np.testing.assert_array_equal(noise[name], genome.draw_layer_noise(k, shape))
+        layers = [genome.layer_key(key, i) for i in range(len(shapes))]
+        kl = jax.random.key_data(genome.kl_key(key))
+        assert all((kl != jax.random.key_data(k)).any() for k in [key, *layers])

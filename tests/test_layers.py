@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
+from sgb import genome
 from sgb.celltypes import assign_cell_types, block_counts, expand_table, sum_blocks, type_pair_block
 from sgb.compression import tree_param_count
 from sgb.elbo import elbo_loss, sown_kl
@@ -21,6 +22,7 @@ from sgb.layers import (
     individual_matmul,
 )
 from sgb.priors import GaussianPrior, ScaleMixturePrior
+from sgb.rl.agent import MLP, NetworkConfig, forward, make_agent
 
 
 def _init(model, x, seed=0):
@@ -225,3 +227,89 @@ def test_elbo_rejects_zero_samples():
             num_samples=0,
             kl_weight=1.0,
         )
+
+
+def _sown(model, params, x, key):
+    """The output and what the layers sowed, applied with ``rngs={"sample": key}``."""
+    out, state = jax.jit(
+        lambda k: model.apply(params, x, rngs={"sample": k}, mutable=["individual", "losses"])
+    )(key)
+    return (
+        out,
+        genome.sown(state["individual"], "noise"),
+        genome.sown(state["individual"], "kernel"),
+        genome.sown(state["losses"], "kl"),
+    )
+
+
+@pytest.mark.parametrize("make_key", [jax.random.key, jax.random.PRNGKey])
+def test_one_key_gives_one_individual_in_the_flax_layers_and_the_pure_functions(make_key):
+    """A 3-layer SGBMLP applied with ``rngs={"sample": key}`` draws bit for bit the noise,
+    kernels and per-layer Monte Carlo KLs (scale mixture prior) that ``draw_noise``,
+    ``kernels`` and ``kl`` give for the same key; two layers of one shape draw apart."""
+    model = SGBMLP(
+        (8, 8, 3), (None, 4, 4, None), prior=ScaleMixturePrior(), rho_init=-1.0, in_features=8
+    )
+    x = jax.random.normal(jax.random.key(0), (5, 8))
+    params = _init(model, x)
+    tables = of_params(params)
+    shapes = {"SGBDense_0": (8, 8), "SGBDense_1": (8, 8), "SGBDense_2": (8, 3)}
+    assert list(tables) == list(shapes)
+    seen = []
+    for seed in (1, 2):
+        key = make_key(seed)
+        out, noise, kernels, kls = _sown(model, params, x, key)
+        drawn = jax.jit(lambda k: genome.draw_noise(k, shapes))(key)
+        developed = jax.jit(genome.kernels)(tables, drawn)
+        assert list(noise) == list(kernels) == list(kls) == list(shapes)
+        for i, name in enumerate(shapes):
+            np.testing.assert_array_equal(noise[name], drawn[name])
+            np.testing.assert_array_equal(kernels[name], developed[name])
+            kl = layer_kl(
+                ScaleMixturePrior(),
+                tables[name].mu,
+                genome.sigma(tables[name]),
+                shapes[name],
+                "synapse",
+                genome.layer_key(genome.kl_key(key), i),
+            )
+            np.testing.assert_array_equal(kls[name], kl)
+        total = genome.kl(tables, shapes, ScaleMixturePrior(), genome.kl_key(key))
+        np.testing.assert_allclose(sum(kls.values()), total, rtol=1e-6)
+        h = x
+        for i, name in enumerate(shapes):
+            h = h @ developed[name] + params["params"][name]["bias"]
+            h = jax.nn.relu(h) if i < 2 else h
+        np.testing.assert_allclose(out, h, rtol=1e-5, atol=1e-6)
+        assert not np.array_equal(noise["SGBDense_0"], noise["SGBDense_1"])
+        seen.append(noise["SGBDense_0"])
+    assert not np.array_equal(*seen)
+
+
+def test_the_agents_flax_network_draws_the_individual_born_from_its_key():
+    """The RL actor's Flax definition (SGB output layer, Bayesian biases) applied with an
+    individual's key develops bit for bit the kernels and biases of ``Network.draw`` and
+    ``Network.layers``, and gives ``forward``'s output."""
+    network = NetworkConfig(
+        hidden=(16, 8),
+        cell_types=4,
+        rho_init=-1.0,
+        typed_inputs=True,
+        sgb_output=True,
+        bayesian_biases=True,
+    )
+    actor = make_agent(network, 5, 2).actor
+    params = actor.init(jax.random.PRNGKey(0), network)
+    assert len(actor.sgb_shapes) == 6
+    x = jax.random.normal(jax.random.key(1), (3, 5))
+    key = jax.random.PRNGKey(7)
+    out, noise, kernels, _ = _sown(MLP(network, 4, 5), params, x, key)
+    drawn = jax.jit(actor.draw)(key)
+    layers = jax.jit(actor.layers)(params, drawn)
+    assert sorted(noise) == sorted(drawn)
+    for name in drawn:
+        np.testing.assert_array_equal(noise[name], drawn[name])
+    for name, (kernel, bias) in zip(actor.names, layers, strict=True):
+        np.testing.assert_array_equal(kernels[name], kernel)
+        np.testing.assert_array_equal(kernels[f"{name}/bias"][0], bias)
+    np.testing.assert_allclose(out, forward(layers, x), rtol=1e-5, atol=1e-6)

@@ -151,6 +151,7 @@ class MLP(nn.Module):
                     rho_init_std=cfg.rho_init_std,
                     in_features=n_in,
                     bayesian_bias=cfg.bayesian_biases,
+                    index=list(network.sgb_shapes).index(name),
                     name=name,
                 )(x)
             else:
