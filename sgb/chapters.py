@@ -28,6 +28,7 @@ def _dgb_vs_sgb(load: Loader, card: prose.Card) -> dict[str, str]:
         | prose.dgb_budget(load("dgb_budget_fashion-mnist_cpu.json")["results"], dense)
         | prose.sgb_full(load("sgb_full_fashion-mnist_cpu.json"))
         | prose.figure2_full(load("dgb_full_fashion-mnist_cpu.json"), card)
+        | prose.supervised_population(card)
     )
 
 

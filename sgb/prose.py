@@ -474,6 +474,29 @@ def _leads(rows: list[Row]) -> str:
     return "; ".join(parts)
 
 
+def supervised_population(card: Card) -> dict[str, str]:
+    """The supervised population against its mean network at the authors' budget
+    (``claims.supervised_population_rows``), per KL counting: the range of the
+    individuals' lead over the ratios, and how many rows carry each verdict
+    (``suppop_authors``, ``suppop_per_pair``)."""
+    rows = card.get("abstract.population_beats_mean_supervised", [])
+    out = {}
+    for name in ("authors", "per_pair"):
+        mine = [r for r in rows if f"({claims.SGB_VARIANTS[name]})" in r.setting]
+        if not mine:
+            out[f"suppop_{name}"] = NOT_RUN
+            continue
+        leads = [r.test.estimate for r in mine]
+        verdicts_found = [r.verdict for r in mine]
+        counts = ", ".join(
+            f"**{verdicts_found.count(v)}** {v}" for v in dict.fromkeys(verdicts_found)
+        )
+        out[f"suppop_{name}"] = (
+            f"{min(leads):+.1f} to {max(leads):+.1f} points over {len(mine)} ratios ({counts})"
+        )
+    return out
+
+
 def _excluding_zero(table) -> int:
     """How many rows of a ``claims.sgb_variant_tests`` table have a 95 % interval without 0."""
     return int(((table["95 % CI low"] > 0) | (table["95 % CI high"] < 0)).sum())

@@ -34,6 +34,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("fig4e.r_legs",),
     ("fig4f.r_terrain",),
     ("fig5.population_beats_mean",),
+    ("abstract.population_beats_mean_supervised",),
     ("theorem.A.1",),
     ("theorem.A.3",),
     ("theorem.A.4",),
