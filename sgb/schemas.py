@@ -494,6 +494,33 @@ class Regime(ResultsFile):
     results: RegimeResults
 
 
+class PeerRun(Training):
+    label: str
+
+
+class PeerComparison(Record):
+    """One evaluation point: our seeds' returns beside the authors' one run."""
+
+    label: str
+    step: Steps
+    ours: List[Return]
+    mean: Return
+    sd: NonNegative | None
+    theirs: Return | None
+    interval: List[Finite] | None
+    inside: bool | None
+
+
+class RegimePeerResults(Record):
+    env: str
+    runs: MaybeEmpty[PeerRun]
+    comparison: MaybeEmpty[PeerComparison]
+
+
+class RegimePeer(ResultsFile):
+    results: RegimePeerResults
+
+
 class GaitRun(Record):
     cell_types: Count | None
     seed: Seed
@@ -957,6 +984,7 @@ SCHEMAS: dict[str, type[ResultsFile]] = {
     "rl/populations_*_*.json": Populations,
     "rl/regime_populations_*_*.json": RegimePopulations,
     "rl/regime_gait_*_*.json": RegimeGait,
+    "rl/regime_peer_*_*.json": RegimePeer,
     "rl/spread_*_*.json": Spread,
     "rl/bet_hedging_*_*.json": BetHedging,
     "rl/innate_start_*_*.json": InnateStart,

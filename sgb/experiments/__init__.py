@@ -267,6 +267,20 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
     ),
+    "regime_peer": Experiment(
+        "regime_peer",
+        chapter=5,
+        figure="the authors' regime beside their own code at 1,638,400 steps: vanilla and "
+        "their aliased 64 types, 3 seeds each, against the one run of theirs",
+        inputs="the Ant (spring)",
+        costs={
+            "smoke": "2 runs of 320 steps, not measured",
+            "cpu": "6 runs of 1,638,400 steps with 3 evaluations on 256 environments, "
+            "not yet measured; resumable",
+            "paper": "the cpu runs",
+        },
+        shares_runs=True,
+    ),
     "regime_gait": Experiment(
         "regime_gait",
         chapter=5,
