@@ -318,6 +318,8 @@ class MeanGap(ResultsFile):
 
 
 class Trajectory(Record):
+    mu0: Finite
+    sigma0: NonNegative
     gap: List[Finite]
     gap_stderr: List[NonNegative]
     prediction: List[Finite]
@@ -326,6 +328,7 @@ class Trajectory(Record):
 class Trajectories(Record):
     convex: Trajectory
     concave: Trajectory
+    nonconvex: Trajectory
 
 
 class Settled(Record):

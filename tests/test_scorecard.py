@@ -170,30 +170,3 @@ def test_the_page_places_every_claim_of_the_table_once():
         "half",
         claims.CLAIMS["fig4e.r_legs"].statement,
     )
-
-
-def test_the_supervised_population_rows_pair_each_seeds_individuals_with_its_mean_network():
-    """Cells with known leads: per synapse the individuals lead by 5 points, per type pair
-    they trail by 3 (seed-to-seed spread 0.1); a lead shared by a seed's two numbers (its
-    own level) cancels in the pairing."""
-    cells = {}
-    for variant, lead in (("authors", 5.0), ("per_pair", -3.0)):
-        for seed, (level, wobble) in enumerate([(60.0, 0.1), (70.0, -0.1), (50.0, 0.0)]):
-            mean_network = (level + wobble) / 100
-            cells[f"{variant}{seed}"] = {
-                "variant": variant,
-                "setting": 30,
-                "seed": seed,
-                "compression": 198.0,
-                "mean_network": mean_network,
-                "accuracy": mean_network + (lead + wobble) / 100,
-            }
-    rows = claims.supervised_population_rows({"cells": cells}, "toy")
-    assert [r.setting for r in rows] == [
-        f"toy, the SGB ({claims.SGB_VARIANTS[v]}) at 198x" for v in ("authors", "per_pair")
-    ]
-    authors, per_pair = rows
-    assert authors.test.estimate == pytest.approx(5.0) and authors.test.n == 3
-    assert authors.verdict == verdicts.LARGER  # 5 points against the 1-point stand-in
-    assert per_pair.test.estimate == pytest.approx(-3.0)
-    assert per_pair.verdict == verdicts.CONTRADICTED
