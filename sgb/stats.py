@@ -361,7 +361,7 @@ def bootstrap_crossing(
     sampling distribution (the seeds' mean, their SEM, n - 1 degrees of freedom), point by
     point and independently. Resampling the seeds instead undercovers at the few seeds
     sweeps have: on curves with a known crossing it covered it in 77 % of 150 trials at 3
-    seeds and 87 % at 5, the t draws in 99 % and 97 % (the curves of ``tests/test_verdicts``)."""
+    seeds and 87 % at 5, the t draws in 99 % and 97 % (the curves of ``tests/test_stats``)."""
     draws = validation.integer("draws", draws)
     level = validation.fraction("level", level)
     rng = np.random.default_rng(validation.seed("seed", seed))

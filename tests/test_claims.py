@@ -1,9 +1,371 @@
 """``sgb.claims``: rows computed from synthetic results with known effects get the verdict
-the rule gives those effects."""
+the rule gives those effects, and the committed scorecard gives every claim one verdict."""
 
+import json
+
+import numpy as np
 import pytest
 
 from sgb import claims, verdicts
+from sgb.paths import committed_results
+from sgb.provenance import _jsonable
+from sgb.reliability import (
+    detectable_between_sd,
+    variance_split,
+)
+
+
+def _sweep(fall: float, seeds: int, rng) -> dict:
+    """Synthetic Figure 3 runs: vanilla at 4000, 128 types at 3000, 16 at 3000 - fall x
+    4000, seed SD 400."""
+    runs = []
+    for k, mean in ((None, 4000.0), (128, 3000.0), (16, 3000.0 - fall * 4000)):
+        for seed in range(seeds):
+            value = float(rng.normal(mean, 400))
+            runs.append(
+                {
+                    "settings": "ours",
+                    "cell_types": k,
+                    "seed": seed,
+                    "final_return": value,
+                    "eval_returns": [value / 2, value, value],
+                }
+            )
+    return {"env": "ant", "runs": runs}
+
+
+def test_figure3_verdicts_on_sweeps_with_known_falls():
+    rng = np.random.default_rng(6)
+    verdict = {
+        (fall, seeds): {
+            r.key: r.verdict for r in claims.figure3_rows(_sweep(fall, seeds, rng), "ant", 2e6)
+        }["fig3.fall_16.ant"]
+        for fall, seeds in ((0.5, 10), (0.0, 40), (0.3, 3))
+    }
+    assert verdict[(0.5, 10)] in verdicts.IN_DIRECTION
+    assert verdict[(0.0, 40)] == verdicts.CONTRADICTED
+    assert verdict[(0.3, 3)] in (verdicts.INCONCLUSIVE, verdicts.REPRODUCED)
+
+
+def test_the_committed_scorecard_gives_every_claim_one_verdict():
+    rows = claims.scorecard(committed_results())
+    assert {r.verdict for r in rows} <= set(verdicts.VERDICTS)
+    keys = {r.key.split(".")[0] + "." + r.key.split(".")[1] for r in rows}
+    assert {"fig2.sgb_better_high", "fig4e.r_legs", "fig5.population_beats_mean"} <= keys
+    assert len(claims.table(rows)) == len(rows)  # every row names what it tests
+    for r in rows:
+        if r.verdict == verdicts.INCONCLUSIVE:
+            assert r.decide  # the budget that would decide is named
+        if r.verdict == verdicts.NOT_TESTABLE:
+            assert r.test is None and r.decide  # the reason
+
+
+def test_the_sigma_law_row_tells_the_appendix_step_from_the_elbo_step():
+    def toy(settled):
+        return {
+            "kl_weights": [0.0, 0.05],
+            "predicted_sigma": [0.0, 0.218],
+            "steps": [0, 3000],
+            "runs": {"softplus": {"settled_mean": [0.01, settled], "settled_sd": [0.01, 0.002]}},
+        }
+
+    (at_fixed_point,) = claims.sigma_law_rows(toy(0.2187))
+    assert at_fixed_point.verdict == verdicts.CONTRADICTED  # sigma stays at sqrt(c/(H+c lambda))
+    (at_zero,) = claims.sigma_law_rows(toy(0.001))
+    assert at_zero.verdict == verdicts.REPRODUCED  # what the appendix's step predicts
+
+
+def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
+    """Six synthetic genomes whose individuals beat their mean network by 5 % of its return
+    and differ from each other: Figure 5 is reproduced, Figure 4E's r is found."""
+    from sgb.experiments import populations
+
+    rng = np.random.default_rng(7)
+    genomes = {}
+    for settings in ("ours", "authors"):
+        for seed in range(3):
+            skill = rng.normal(0, 300, (100, 1))
+            normal = 2000 + skill + rng.normal(0, 500, (100, 32))
+            long_legs = 1500 + skill + rng.normal(0, 500, (100, 32))
+            mean_net = normal - 100 + rng.normal(0, 100, (100, 32))
+            parts = {"normal": normal, "long_legs": long_legs, "mean_network": mean_net}
+            genomes[f"{settings}{seed}"] = {
+                "settings": settings,
+                "training_seed": seed,
+                "parts": {k: {"returns": v.tolist()} for k, v in parts.items()},
+            }
+    config = populations.populations_config("cpu")
+    results = populations.summarise({"genomes": genomes}, config)
+    rows = {(r.key, r.setting.split(",")[1]): r for r in claims.populations_rows(results)}
+    for who in (" our genome", " the authors' genome"):
+        assert rows["fig5.population_beats_mean", who].verdict in verdicts.IN_DIRECTION
+        assert rows["fig4e.r_legs", who].verdict in verdicts.IN_DIRECTION
+        # individuals 15 % of the return apart (SD 300 of 2000) differ by more than 1 %
+        assert rows["title.variability", who].verdict == verdicts.LARGER
+
+
+def test_regime_population_rows_tell_the_two_protocols_apart():
+    """One synthetic genome read back through JSON: its individuals beat the mean network
+    by 5 % on the same states, and under sampled actions by 2 % with a mean network so
+    noisy that only the one-sample t (which takes its mean as exact) calls it."""
+    from sgb.experiments import populations
+
+    rng = np.random.default_rng(11)
+    skill = rng.normal(0, 300, (100, 1))
+    normal = 2000 + skill + rng.normal(0, 300, (100, 64))
+    parts = {
+        "normal": normal,
+        "long_legs": 1500 + skill + rng.normal(0, 300, (100, 64)),
+        "mean_network": normal - 100 + rng.normal(0, 50, (100, 64)),
+        "sampled": 2040 + skill + rng.normal(0, 300, (100, 64)),
+        "mean_network_sampled": rng.normal(2000, 2000, (16, 1)),
+    }
+    genome = {"training_seed": 0, "parts": {k: {"returns": v.tolist()} for k, v in parts.items()}}
+    genome["summary"] = populations.genome_summary(parts)
+    stored = json.loads(json.dumps(_jsonable({"genomes": {"regime": genome}})))
+    rows = claims.regime_population_rows(stored)
+    fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
+    assert fig5[0].verdict in verdicts.IN_DIRECTION
+    assert fig5[0].test.estimate == pytest.approx(5.0, abs=0.5)  # % of the mean network
+    one_sample, welch = fig5[1:]
+    assert one_sample.test.p < 0.05 < welch.test.p
+    assert welch.verdict == verdicts.INCONCLUSIVE
+    (legs,) = [r for r in rows if r.key == "fig4e.r_legs"]
+    assert legs.verdict in verdicts.IN_DIRECTION and legs.test.low > 0.5
+
+
+def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
+    rng = np.random.default_rng(2)
+    records = [
+        {"model": model, "setting": s, "seed": seed, "compression": ratio, "accuracy": acc}
+        for s, ratio in enumerate((10.0, 100.0, 700.0))
+        for model, shift in (("sgb", 0.05 if ratio > 50 else -0.05), ("dgb", 0.0))
+        for seed, acc in enumerate(0.8 + shift + 0.002 * rng.standard_normal(4))
+    ]
+    table = claims.figure2_ratio_tests({"records": records})
+    assert list(table.index) == [10, 100, 700]
+    expected = np.array([-5.0, 5.0, 5.0])
+    assert np.all(table["95 % CI low"] < expected) and np.all(expected < table["95 % CI high"])
+    assert np.all(table["p"] < 1e-3) and set(table["seeds (SGB, DGB)"]) == {"4, 4"}
+
+
+def test_sgb_variant_tests_find_a_known_shift_and_skip_ratios_without_two_seeds():
+    """A variant 3 points above the authors' at 10x and level at 400x; its 700x cell has
+    one seed, so that ratio has no test."""
+    rng = np.random.default_rng(5)
+    shifts = {"authors": {10.0: 0.0, 400.0: 0.0, 700.0: 0.0}, "rho_ours": {10.0: 0.03, 400.0: 0.0}}
+    cells = {
+        f"{variant}_{ratio}_{seed}": {
+            "variant": variant,
+            "model": "sgb",
+            "setting": int(ratio),
+            "seed": seed,
+            "compression": ratio,
+            "accuracy": 0.7 + shift + 0.002 * rng.standard_normal(),
+        }
+        for variant, by_ratio in shifts.items()
+        for ratio, shift in by_ratio.items()
+        for seed in range(4)
+    }
+    cells["rho_ours_700.0_0"] = {**cells["authors_700.0_0"], "variant": "rho_ours"}
+    table = claims.sgb_variant_tests({"cells": cells}, "rho_ours")
+    assert list(table.index) == [10, 400]
+    assert np.all(table["95 % CI low"] < [3.0, 0.0]) and np.all([3.0, 0.0] < table["95 % CI high"])
+    assert table["p"].iloc[0] < 1e-3 and table["p"].iloc[1] > 1e-3
+    assert set(table["seeds (rho_ours, authors)"]) == {"4, 4"}
+    assert claims.sgb_variant_tests({"cells": cells}, "per_pair").empty
+
+
+def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfinished_cells():
+    """The DGB 10 points above the SGB near 200x, 10 below near 700x; a DGB cell stopped
+    short of its rounds and a ratio with one seed count for nothing."""
+    rng = np.random.default_rng(4)
+    cells = {}
+    for ratio, sgb_ratio in {200.0: 198.0, 700.0: 715.0}.items():
+        for seed in range(3):
+            cells[f"authors_{ratio}_{seed}"] = {
+                "variant": "authors",
+                "model": "sgb",
+                "setting": int(ratio),
+                "seed": seed,
+                "compression": sgb_ratio,
+                "accuracy": 0.7 - 0.4 * (ratio > 500) + 0.004 * rng.standard_normal(),
+            }
+    sgb_full = {"variants": {"authors": {}}, "cells": cells}
+
+    def dgb_cell(ratio: float, seed: int, accuracy: float, rounds: int = 500) -> dict:
+        return {
+            "ratio": ratio,
+            "seed": seed,
+            "compression_ours": ratio * 1.01,
+            "compression_authors": ratio * 1.05,
+            "nominal_ratio": ratio * 0.7,
+            "records": [{"rounds": rounds - 25, "test_accuracy": 0.0}]
+            + [{"rounds": rounds, "test_accuracy": accuracy}],
+        }
+
+    dgb = {
+        f"{r}_{s}": dgb_cell(r, s, a + 0.004 * rng.standard_normal())
+        for r, a in ((200.0, 0.80), (700.0, 0.20))
+        for s in range(3)
+    }
+    dgb["400_0"] = dgb_cell(400.0, 0, 0.5)  # one seed: no test
+    dgb["700_3"] = dgb_cell(700.0, 3, 0.9, rounds=475)  # not finished (it ran 475 of 500)
+    dgb["700_3"]["records"].pop()
+    rows = claims.figure2_full_rows(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    assert [r.setting for r in rows] == [
+        f"Fashion-MNIST, the authors' DGB layout at {d}x (target {t}x), the SGB "
+        f"(KL per synapse, rho from -7: the authors') at {s}x"
+        for d, t, s in ((202, 200, 198), (707, 700, 715))
+    ]
+    near_200, near_700 = rows
+    assert near_200.verdict == verdicts.CONTRADICTED
+    assert near_200.test.estimate == pytest.approx(-10.0, abs=1.0) and near_200.test.n == 3
+    assert near_700.verdict in verdicts.IN_DIRECTION
+    assert near_700.test.estimate == pytest.approx(10.0, abs=1.0)
+    # the curves cross where the 10-point lead changes hands, halfway in log(ratio)
+    cross = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    assert cross.key == "fig2.full.crossover" and cross.verdict == verdicts.REPRODUCED
+    assert 300 < cross.test.low < cross.test.estimate < cross.test.high < 500
+    behind = claims.figure2_full_crossover(rows[:1], sgb_full, {"cells": dgb}, 500, "x")
+    assert behind.verdict == verdicts.CONTRADICTED  # the highest ratio's row decides
+    for name, cell in dgb.items():  # the DGB far above the SGB at every ratio
+        cell["records"][-1]["test_accuracy"] += 0.5 * name.startswith("700")
+    apart = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "x")
+    assert apart.test is None and "0% of simulated curves cross" in apart.setting
+
+
+def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
+    rng = np.random.default_rng(5)
+    records = []
+    for seed in range(5):
+        for k, gain in ((2, 5.0), (8, 0.0)):
+            base = 0.5 + 0.02 * rng.standard_normal()  # the seed's shared start
+            for stochastic in (True, False):
+                accuracy = base + (gain / 100 if stochastic else 0) + 0.002 * rng.standard_normal()
+                individuals = (accuracy + 0.01 * rng.standard_normal(100)).tolist()
+                records.append(
+                    {
+                        "hidden_types": k,
+                        "stochastic": stochastic,
+                        "seed": seed,
+                        "compression": 40.0 / k,
+                        "mean_fitness": [0.1] * 300,
+                        "individuals": individuals if stochastic else [accuracy] * 100,
+                        "mean_network": accuracy,
+                    }
+                )
+    helps, flat = claims.evolution_rows({"dataset": "digits", "records": records})
+    assert helps.verdict in verdicts.IN_DIRECTION
+    assert helps.test.estimate == pytest.approx(5.0, abs=0.5)
+    assert flat.verdict == verdicts.CONTRADICTED and flat.test.high < 1.0
+
+
+def test_bet_hedging_rows_credit_diversified_individuals_and_not_clones_of_clones():
+    """Three genomes per spread. Wide: each individual thrives on some conditions and
+    fails on others while the mean network fails everywhere but at home. Narrow: the
+    individuals are the clones, so nothing differs."""
+    from sgb.experiments import bet_hedging
+
+    rng = np.random.default_rng(4)
+    genomes = []
+    for rho, seed in ((-1.5, 0), (-1.5, 1), (-1.5, 2), (-5.0, 0), (-5.0, 1), (-5.0, 2)):
+        # the clones: good at home; on the next condition a tenth of them pass 500
+        home = np.r_[[1000.0, 372.0], np.full(2, 100.0)]
+        clones = home[:, None, None] + rng.normal(0, 20, (4, 100, 5))
+        clones[1] += rng.normal(0, 98, (100, 5))
+        if rho == -1.5:
+            niche = rng.integers(0, 4, 100)  # each individual's own good condition
+            good = niche[None, :] == np.arange(4)[:, None]
+            individuals = np.where(good, 900.0, 100.0)[:, :, None] + rng.normal(0, 20, (4, 100, 5))
+        else:
+            individuals = clones
+        scale = float(clones[0].mean())
+        genomes.append(
+            {
+                "rho_init": rho,
+                "training_seed": seed,
+                "sigma_trained": 0.2 if rho == -1.5 else 0.007,
+                "returns": {"individuals": {"normal": individuals[0].tolist()}},
+                "scores": bet_hedging.scores(individuals, clones, scale),
+            }
+        )
+    rows = claims.bet_hedging_rows(json.loads(json.dumps({"genomes": genomes})))
+    wide, narrow = rows[:2], rows[2:]
+    clones_p = [g["scores"]["clones"]["p_at_least"]["0.5"]["10"] for g in genomes[:3]]
+    assert 0.25 < min(clones_p) < max(clones_p) < 0.5  # home, and the next condition by chance
+    assert [r.key for r in wide] == ["ch6.hedging_geometric", "ch6.hedging_survival"]
+    assert all(r.verdict in verdicts.IN_DIRECTION for r in wide) and len(wide) == 2
+    assert wide[1].test.estimate > 0.5
+    assert [r.verdict for r in narrow] == [verdicts.NOT_TESTABLE] * 2
+    assert all("+0.00" in r.decide and r.setting.startswith("rho from -5") for r in narrow)
+
+
+def test_innate_start_rows_find_a_head_start_and_rule_out_none():
+    """Five seeds: the mean network's start learns 30 % more over the budget than the
+    fresh network of its seed, a random individual's as much as the fresh one."""
+    rng = np.random.default_rng(8)
+    runs = []
+    for seed in range(5):
+        fresh = 2000 + 300 * rng.standard_normal()
+        for genome, start, gain in ((None, "fresh", 0.0), ("g", "mean", 0.3), ("g", "random", 0.0)):
+            auc = fresh * (1 + gain + 0.02 * rng.standard_normal()) if genome else fresh
+            runs.append(
+                {"genome": genome, "start": start, "seed": seed, "auc": auc, "eval_steps": [0, 5e6]}
+            )
+    selections = [{"genome": "g", "individual_means": [1000.0] * 100}]
+    mean, random = claims.innate_start_rows({"runs": runs, "selections": selections})
+    assert mean.verdict in verdicts.IN_DIRECTION and mean.test.estimate == pytest.approx(
+        0.3, abs=0.03
+    )
+    assert mean.setting == "g, from its mean network"
+    assert random.verdict == verdicts.CONTRADICTED and "random" in random.setting
+    starts = (("individual", 0.6, 0.8), ("mean", 0.4, 0.8), ("fresh", 0.1, 0.8))
+
+    def runs() -> list[dict]:
+        noise = 0.01 * rng.standard_normal(len(starts))  # each network's own end
+        return [
+            {"start": s, "steps": [0, 50, 100], "accuracy": [a0, a, a + e]}
+            for (s, a0, a), e in zip(starts, noise, strict=True)
+        ]
+
+    twin = {"dataset": "digits", "records": [{"runs": runs()} for _ in range(4)]}
+    rows = {r.setting: r for r in claims.innate_supervised_rows(twin)}
+    # the head start counts over the epoch (a quarter of it: 12.5 and 7.5 points), not after
+    area = rows["digits, from individual, over the epoch"].test
+    assert area.estimate == pytest.approx(12.5, abs=0.5)
+    assert rows["digits, from mean, over the epoch"].test.estimate == pytest.approx(7.5, abs=0.5)
+    # 7.5 points, measured to within a point or so, against a stand-in of 1 point
+    assert rows["digits, from mean, over the epoch"].verdict == verdicts.LARGER
+    assert rows["digits, from individual, after one epoch"].verdict == verdicts.CONTRADICTED
+
+
+def _population_summary(rng, mean: float, between_sd: float, within_sd: float, k: int) -> dict:
+    """A populations summary (its normal body) of 100 simulated individuals x k episodes."""
+    x = mean + rng.normal(0, between_sd, (100, 1)) + rng.normal(0, within_sd, (100, k))
+    split = variance_split(x)
+    return {
+        "normal": {
+            "mean_return": float(x.mean()),
+            "variance_split": split._asdict(),
+            "between_sd": float(np.sqrt(split.between_var)),
+        }
+    }
+
+
+def test_the_variability_row_finds_individuals_that_differ_and_rules_out_clones():
+    """Against about 1 % of the return: individuals 5 % apart are a larger variability;
+    clones measured closely contradict it; clones measured with noisy episodes leave it
+    open, naming the episodes that would decide."""
+    rng = np.random.default_rng(11)
+    differ = claims.variability_row(_population_summary(rng, 1000, 50, 100, 32), "s")
+    assert differ.verdict == verdicts.LARGER and differ.test.low > 1.0
+    clones = claims.variability_row(_population_summary(rng, 1000, 0, 20, 64), "s")
+    assert clones.verdict == verdicts.CONTRADICTED and clones.test.high < 1.0
+    noisy = claims.variability_row(_population_summary(rng, 1000, 0, 1000, 4), "s")
+    assert noisy.verdict == verdicts.INCONCLUSIVE
+    episodes = int(noisy.decide.split()[0])
+    assert episodes > 4 and detectable_between_sd(100, episodes, 1000) <= 10.0 * 1.02
 
 
 def test_the_supervised_population_rows_pair_each_seeds_individuals_with_its_mean_network():

@@ -1,119 +1,51 @@
-"""Nothing lost, nothing silently wrong: atomic strict-JSON results, profile-named files,
-output locations checked first, and training that stops on divergence."""
-
-import json
-import os
-from pathlib import Path
+"""``sgb.reliability``: the variance split recovers a known intraclass correlation, and the
+detectable SD between individuals is found at the stated power."""
 
 import numpy as np
 import pytest
 
-from sgb import provenance
-from sgb.__main__ import main
-from sgb.data import digits
-from sgb.dgb import DGBConfig
-from sgb.divergence import TrainingDiverged
-from sgb.provenance import read_results, results_file
-from sgb.recording import write_results
-from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate, train_classifier
-
-
-def test_a_failed_write_leaves_the_old_results_intact(tmp_path, monkeypatch):
-    path = write_results(tmp_path / "fig_cpu.json", {"accuracy": [0.9, 0.8]}, {"profile": "cpu"})
-    old = path.read_bytes()
-    real_fdopen = os.fdopen
-
-    class HalfWriter:
-        """A file that writes half of what it is given, then fails (a full disk)."""
-
-        def __init__(self, handle):
-            self.handle = handle
-
-        def __enter__(self):
-            return self
-
-        def __exit__(self, *exc):
-            self.handle.close()
-
-        def write(self, data):
-            self.handle.write(data[: len(data) // 2])
-            raise OSError(28, "No space left on device")
-
-    monkeypatch.setattr(provenance.os, "fdopen", lambda fd, mode: HalfWriter(real_fdopen(fd, mode)))
-    with pytest.raises(OSError, match="No space"):
-        write_results(path, {"accuracy": [0.1] * 10_000}, {"profile": "cpu"})
-    assert path.read_bytes() == old
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["fig_cpu.json"]  # no temporary left
-
-
-def test_results_are_strict_json_with_null_for_non_finite_numbers(tmp_path):
-    results = {"sem": float("nan"), "values": np.array([1.0, np.inf]), "n": 1}
-    path = write_results(tmp_path / "x_cpu.json", results, {"profile": "cpu"})
-
-    def reject(constant):
-        raise AssertionError(f"non-standard JSON constant {constant}")
-
-    payload = json.loads(path.read_text(), parse_constant=reject)
-    assert payload["results"] == {"sem": None, "values": [1.0, None], "n": 1}
-    assert "null" in provenance.provenance({}, "cpu", [0], 0.0)
-
-
-def test_each_profile_has_its_own_file_and_a_bad_location_fails_first(tmp_path):
-    names = {results_file(tmp_path, "theory", p).name for p in ("smoke", "cpu", "paper")}
-    assert names == {"theory_smoke.json", "theory_cpu.json", "theory_paper.json"}
-    blocker = tmp_path / "a_file"
-    blocker.write_text("")
-    with pytest.raises(ValueError, match="cannot write results under"):
-        results_file(blocker / "sub", "theory", "cpu")
-
-
-def test_cli_rejects_an_unwritable_out_dir_before_running(tmp_path, capsys):
-    blocker = tmp_path / "a_file"
-    blocker.write_text("")
-    # bbb would train for minutes; the location is refused before any training
-    assert main(["reproduce", "bbb", "--out-dir", str(blocker / "out")]) == 2
-    assert "cannot write results under" in capsys.readouterr().err
-
-
-def _small_digits():
-    data = digits(seed=0)
-    return data._replace(x_train=data.x_train[:256], y_train=data.y_train[:256])
-
-
-def test_sgb_training_stops_on_divergence_and_reports_no_accuracy():
-    config = ClassifierConfig(hidden=(16,), learning_rate=1e30, epochs=2, batch_size=64)
-    with pytest.raises(TrainingDiverged, match=r"at step \d+"):
-        train_classifier(config, _small_digits(), progress=False)
-
-
-@pytest.mark.parametrize(
-    "config",
-    [
-        DenseConfig(hidden=(16,), learning_rate=1e30, epochs=2),
-        DGBConfig(
-            hidden=(16,),
-            gnet_width=4,
-            learning_rate=1e30,
-            rounds=2,
-            pnet_steps=4,
-            batch_size=64,
-            gnet_steps=5,
-            validation_size=32,
-        ),
-    ],
+from sgb.reliability import (
+    between_sd_at,
+    detectable_between_sd,
+    episodes_for,
+    episodes_to_detect,
+    projected_reliability,
+    variance_split,
 )
-def test_dense_and_dgb_training_stop_on_divergence(config):
-    with pytest.raises(TrainingDiverged, match=r"at step \d+"):
-        train_and_evaluate(config, _small_digits(), progress=False)
 
 
-def test_committed_results_are_strict_json():
-    def reject(constant):
-        raise AssertionError(f"non-standard JSON constant {constant}")
+def test_variance_split_recovers_a_known_intraclass_correlation():
+    rng = np.random.default_rng(5)
+    sigma_b, sigma_w, n, k = 1.0, 2.0, 200, 5
+    icc = sigma_b**2 / (sigma_b**2 + sigma_w**2)  # 0.2
+    covered = 0
+    for _ in range(200):
+        x = rng.normal(0, sigma_b, (n, 1)) + rng.normal(0, sigma_w, (n, k))
+        split = variance_split(x)
+        covered += split.icc_ci[0] <= icc <= split.icc_ci[1]
+    assert 0.91 <= covered / 200 <= 0.99
+    assert split.reliability == pytest.approx(projected_reliability(split.icc, k), rel=1e-9)
+    assert episodes_for(0.2) == pytest.approx(16.0)
+    assert projected_reliability(0.2, episodes_for(0.2)) == pytest.approx(0.8)
+    # individuals that do not differ: the split says so
+    same = variance_split(rng.normal(0, 1, (100, 3)))
+    assert same.icc_ci[0] < 0 < same.icc_ci[1]
 
-    root = Path(__file__).resolve().parents[1] / "results"
-    files = sorted(root.rglob("*_cpu.json")) + sorted(root.rglob("bench_*.json"))
-    assert files
-    for path in files:
-        json.loads(path.read_text(), parse_constant=reject)
-        assert read_results(path)
+
+def test_the_detectable_between_sd_is_found_four_times_in_five():
+    """At the SD between individuals it names, the F-test (p < 0.05) rejects in about 80 %
+    of simulated populations (30 individuals x 5 episodes, within SD 1), and more episodes
+    lower it to any target."""
+    rng = np.random.default_rng(3)
+    n, k = 30, 5
+    sd = detectable_between_sd(n, k, 1.0)
+    found = 0
+    for _ in range(3000):
+        x = rng.normal(0, sd, (n, 1)) + rng.normal(0, 1.0, (n, k))
+        found += variance_split(x).p < 0.05
+    assert abs(found / 3000 - 0.8) < 0.03
+    k_needed = episodes_to_detect(n, 1.0, sd / 2)
+    assert detectable_between_sd(n, k_needed, 1.0) <= sd / 2
+    assert detectable_between_sd(n, k_needed - 1, 1.0) > sd / 2
+    assert between_sd_at(0.2, 4.0) == pytest.approx(1.0)
+    assert between_sd_at(-0.01, 4.0) == 0.0
