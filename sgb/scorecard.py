@@ -26,6 +26,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("fig2.dgb_better_low",),
     ("fig2.full.sgb_better_high", "fig2.sgb_better_high"),
     ("fig2.sgb_declines_slowly",),
+    ("fig2.kl_explains_low",),
     ("fig2.full.crossover", "fig2.crossover"),
     ("fig2.cifar",),
     ("fig3.level_128.regime.ant", "fig3.level_128.ant", "fig3.level_128.halfcheetah"),

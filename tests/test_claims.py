@@ -431,3 +431,36 @@ def test_descent_rows_read_the_end_of_training_against_the_second_order_term():
     assert network.verdict == verdicts.CONTRADICTED
     with pytest.raises(ValueError, match="theorem.A.2"):
         claims.judge("theorem.A.2", "s", toy.test, "b")
+
+
+def _kl_cells(shift: float) -> dict:
+    """The authors' SGB at 60 % (seeds 59.9, 60.0, 60.1) and the KL per type pair ``shift``
+    points above it (seeds spread by 0.2), at the lowest ratio (785 types), and one cell of
+    each at a higher ratio."""
+    cells = {}
+    for variant, level, spread in (("authors", 60.0, 0.1), ("per_pair", 60.0 + shift, 0.2)):
+        for seed, wobble in enumerate((-spread, 0.0, spread)):
+            accuracy = (level + wobble) / 100
+            cells[f"{variant}{seed}"] = {
+                "variant": variant,
+                "setting": 785,
+                "seed": seed,
+                "accuracy": accuracy,
+                "compression": 10.0,
+            }
+        cells[f"{variant}_high"] = {**cells[f"{variant}0"], "setting": 10, "compression": 400.0}
+    return {"cells": cells}
+
+
+def test_the_kl_share_row_weighs_the_kls_effect_against_the_dgbs_whole_lead():
+    """The DGB 20 points above the authors' SGB: a weaker KL that closes 8 of them is
+    reproduced in direction but smaller; one that closes all 20 is reproduced."""
+    budget = {"records": [{"rounds": 500, "test_accuracy": 0.80}]}
+    part = claims.kl_share_row(_kl_cells(8.0), budget, "toy")
+    assert part.paper_effect == pytest.approx(20.0)
+    assert part.test.estimate == pytest.approx(8.0)
+    assert part.verdict == verdicts.SMALLER
+    whole = claims.kl_share_row(_kl_cells(20.0), budget, "toy")
+    assert whole.verdict == verdicts.REPRODUCED
+    one_seed = {k: c for k, c in _kl_cells(8.0)["cells"].items() if c["seed"] == 0}
+    assert claims.kl_share_row({"cells": one_seed}, budget, "toy") is None
