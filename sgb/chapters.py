@@ -29,6 +29,7 @@ def _dgb_vs_sgb(load: Loader, card: prose.Card) -> dict[str, str]:
         | prose.sgb_full(load("sgb_full_fashion-mnist_cpu.json"))
         | prose.figure2_full(load("dgb_full_fashion-mnist_cpu.json"), card)
         | prose.supervised_population(card)
+        | prose.kl_share(card)
     )
 
 

@@ -474,6 +474,14 @@ def _leads(rows: list[Row]) -> str:
     return "; ".join(parts)
 
 
+def kl_share(card: Card) -> dict[str, str]:
+    """Section 2.1's KL explanation at about 10x (``claims.kl_share_row``): the row's texts
+    (``kl_share_*``) and the DGB's lead it is weighed against (``kl_share_lead``)."""
+    row = _row(card, "fig2.kl_explains_low")
+    lead = NOT_RUN if row is None else f"{row.paper_effect:.1f} points"
+    return row_texts("kl_share", row) | {"kl_share_lead": lead}
+
+
 def supervised_population(card: Card) -> dict[str, str]:
     """The supervised population against its mean network at the authors' budget
     (``claims.supervised_population_rows``), per KL counting: the range of the
