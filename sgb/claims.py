@@ -99,7 +99,7 @@ class Claim(NamedTuple):
 ONE_POINT = "the paper shows no number: 1 point, the smallest difference taken to matter"
 ONE_PERCENT = "about 1 % of the return, as the authors' plot data imply"
 _CROSS = "the curves cross: DGB better at low, SGB at high compression"
-_CROSS_EFFECT = "compression (ours) where the curves first cross"
+_CROSS_EFFECT = "compression where the SGB first overtakes the DGB (the count in the setting)"
 _FALL = "the return falls off near 16 types (128 against 16 types)"
 _VARIABILITY = (
     "individuals of one genome differ in innate return (phenotypic variability)",
@@ -185,8 +185,8 @@ CLAIMS: dict[str, Claim] = {
             "a crossover",
             _CROSS_EFFECT,
             None,
-            "both sides of the crossover",
             "",
+            "seeds",
         ),
         Claim(
             "fig2.full.sgb_better_high",
@@ -205,8 +205,8 @@ CLAIMS: dict[str, Claim] = {
             "a crossover",
             _CROSS_EFFECT,
             None,
-            "both sides of the crossover",
             "",
+            "seeds",
         ),
         Claim(
             "fig2.kl_explains_low",
@@ -506,16 +506,21 @@ def untestable(key: str, reason: str) -> Row:
 
 
 def _accuracies(
-    records: list[dict], model: str, min_seeds: int = 1, score: str = "accuracy"
+    records: list[dict],
+    model: str,
+    min_seeds: int = 1,
+    score: str = "accuracy",
+    count: str = "compression",
 ) -> dict[float, np.ndarray]:
-    """Per setting of ``model`` (keyed by its compression, ours) run at ``min_seeds`` seeds
-    or more, the seeds' accuracies (their field ``score``)."""
+    """Per setting of ``model`` (keyed by its compression under ``count``: ``"compression"``,
+    ours, or ``"compression_authors"``) run at ``min_seeds`` seeds or more, the seeds'
+    accuracies (their field ``score``)."""
     by_setting: dict[int, list[dict]] = {}
     for r in records:
         if r["model"] == model:
             by_setting.setdefault(r["setting"], []).append(r)
     return {
-        float(np.mean([r["compression"] for r in rs])): np.array([r[score] for r in rs])
+        float(np.mean([r[count] for r in rs])): np.array([r[score] for r in rs])
         for rs in by_setting.values()
         if len(rs) >= min_seeds
     }
@@ -722,24 +727,27 @@ SGB_VARIANTS = {
 }
 
 
+COUNTS = {"compression": "our count", "compression_authors": "the authors' count"}
+
+
 def crossover_row(
-    rows: list[Row], sgb: dict, dgb: dict, setting: str, key: str = "fig2.crossover"
+    sgb: dict, dgb: dict, setting: str, key: str, budget: str, amount: float | None
 ) -> Row:
-    """The crossover exists where both sides hold: its verdict combines the rows of the
-    sides among ``rows`` (reproduced only if every side is; contradicted if one is). Its
-    estimate is the ratio (ours) where the mean curves of ``sgb`` and ``dgb`` (ratio ->
-    the seeds' accuracies) first cross, with the interval of ``sgb.stats.bootstrap_crossing``;
-    no test where the mean curves do not cross (the setting says how often simulated ones do)."""
-    sides = [r for r in rows if r.key.endswith(("dgb_better_low", "sgb_better_high"))]
-    found = [r.verdict for r in sides]
-    if verdicts.CONTRADICTED in found:
-        verdict = verdicts.CONTRADICTED
-    elif found and all(v in verdicts.IN_DIRECTION for v in found):
-        verdict = verdicts.REPRODUCED
+    """The crossover judged from the whole curves of ``sgb`` and ``dgb`` (ratio -> the
+    seeds' accuracies): its estimate is the ratio where the SGB's mean curve first
+    overtakes the DGB's, its interval that of ``sgb.stats.bootstrap_crossing``, and its
+    verdict the share of simulated curves that cross so: reproduced where at least 95 %
+    do, contradicted where at most 5 % do, else inconclusive. No test where the mean curves
+    do not cross."""
+    crossing = stats.bootstrap_crossing(sgb, dgb, rising=True)
+    share = crossing.share_crossing
+    if share >= stats.LEVEL and not math.isnan(crossing.estimate):
+        verdict, decide = verdicts.REPRODUCED, ""
+    elif share <= 1 - stats.LEVEL:
+        verdict, decide = verdicts.CONTRADICTED, ""
     else:
         verdict = verdicts.INCONCLUSIVE
-    decide = "" if verdict != verdicts.INCONCLUSIVE else "see the two sides' rows"
-    crossing = stats.bootstrap_crossing(sgb, dgb)
+        decide = f"more seeds: {share:.0%} of simulated curves cross, {stats.LEVEL:.0%} would"
     seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
     test = None  # where the mean curves do not cross: no crossing to put an interval on
     if not math.isnan(crossing.estimate):
@@ -756,42 +764,54 @@ def crossover_row(
     claim = CLAIMS[key]
     return Row(
         claim,
-        f"{setting}; {crossing.share_crossing:.0%} of simulated curves cross",
+        f"{setting}; {share:.0%} of simulated curves cross",
         claim.paper_effect,
         claim.basis,
         test,
-        sides[0].budget if sides else "-",
+        budget,
         verdict,
         decide,
-        sides[0].amount if sides else None,
+        amount,
     )
 
 
-def figure2_crossover(rows: list[Row], results: dict, dataset: str) -> Row:
-    """``crossover_row`` of Figure 2's cpu sweep (its ``results``) on ``dataset``."""
-    sgb, dgb = _accuracies(results["records"], "sgb"), _accuracies(results["records"], "dgb")
-    return crossover_row(rows, sgb, dgb, f"{dataset}, our DGB layout")
+def figure2_crossover(rows: list[Row], results: dict, dataset: str) -> list[Row]:
+    """``crossover_row`` of Figure 2's cpu sweep (its ``results``) on ``dataset``, under
+    each count of compression (``COUNTS``); its budget that of the sweep's ``rows``."""
+    records = results["records"]
+    return [
+        crossover_row(
+            _accuracies(records, "sgb", count=count),
+            _accuracies(records, "dgb", count=count),
+            f"{dataset}, our DGB layout, {words}",
+            "fig2.crossover",
+            rows[0].budget,
+            rows[0].amount,
+        )
+        for count, words in COUNTS.items()
+    ]
 
 
-def figure2_full_crossover(
-    rows: list[Row], sgb_full: dict, dgb_full: dict, rounds: int, dataset: str
-) -> Row | None:
+def figure2_full_crossover(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str) -> list[Row]:
     """``crossover_row`` at the authors' budgets (the results of ``sgb.experiments.
     sgb_full`` and ``dgb_full``), for the SGB as the authors train it, over the ratios
-    where at least 2 seeds finished; ``None`` before two DGB ratios have. Its one side is
-    the row of the highest ratio among ``rows`` (``figure2_full_rows``): a crossing inside
-    Figure 2's range needs the SGB above the DGB there (the low side, the DGB above the SGB,
-    is the row ``fig2.dgb_better_low``)."""
+    where at least 2 seeds finished, under each count of compression; none before two DGB
+    ratios have."""
     cells = [c for c in sgb_full["cells"].values() if c["variant"] == "authors"]
-    sgb = _accuracies(cells, "sgb", min_seeds=2)
     dgb_records = figure2_records(dgb_full, rounds)
-    dgb = _accuracies(dgb_records, "dgb", min_seeds=2)
-    if len(dgb) < 2 or len(sgb) < 2:
-        return None
-    authors = SGB_VARIANTS["authors"]
-    sides = [r for r in rows if f"the SGB ({authors})" in r.setting][-1:]
-    setting = f"{dataset}, the authors' DGB layout, the SGB ({authors})"
-    return crossover_row(sides, sgb, dgb, setting, "fig2.full.crossover")
+    rows = []
+    for count, words in COUNTS.items():
+        sgb = _accuracies(cells, "sgb", min_seeds=2, count=count)
+        dgb = _accuracies(dgb_records, "dgb", min_seeds=2, count=count)
+        if len(dgb) < 2 or len(sgb) < 2:
+            return []
+        seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
+        setting = (
+            f"{dataset}, the authors' DGB layout, the SGB ({SGB_VARIANTS['authors']}), {words}"
+        )
+        budget = f"{seeds} seeds; {FULL_BUDGET}"
+        rows.append(crossover_row(sgb, dgb, setting, "fig2.full.crossover", budget, FULL_EPOCHS))
+    return rows
 
 
 # Figure 3 ---------------------------------------------------------------------------------
@@ -1431,15 +1451,15 @@ def scorecard(results_dir: Path) -> list[Row]:
     fig2 = load("fig2_fashion-mnist_cpu.json")
     if fig2 is not None:
         f2 = figure2_rows(fig2["results"], "Fashion-MNIST")
-        rows += f2 + [figure2_crossover(f2, fig2["results"], "Fashion-MNIST")]
+        rows += f2 + figure2_crossover(f2, fig2["results"], "Fashion-MNIST")
     sgb_full = load("sgb_full_fashion-mnist_cpu.json")
     dgb_full = load("dgb_full_fashion-mnist_cpu.json")
     if sgb_full is not None and dgb_full is not None:
         rounds = dgb_full["provenance"]["config"]["dgb"]["rounds"]
         sgb_results, dgb_results = sgb_full["results"], dgb_full["results"]
         full = figure2_full_rows(sgb_results, dgb_results, rounds, "Fashion-MNIST")
-        cross = figure2_full_crossover(full, sgb_results, dgb_results, rounds, "Fashion-MNIST")
-        rows += full + ([cross] if cross else [])
+        cross = figure2_full_crossover(sgb_results, dgb_results, rounds, "Fashion-MNIST")
+        rows += full + cross
         rows += supervised_population_rows(sgb_results, "Fashion-MNIST")
         budget = load("dgb_budget_fashion-mnist_cpu.json")
         share = (

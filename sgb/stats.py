@@ -295,8 +295,9 @@ def _log_curve(side: str, x, y) -> tuple[np.ndarray, np.ndarray]:
     return np.log(x), y
 
 
-def crossings(x_a, y_a, x_b, y_b) -> list[float]:
-    """Where curve a minus curve b changes sign, in x, low to high.
+def crossings(x_a, y_a, x_b, y_b, rising: bool = False) -> list[float]:
+    """Where curve a minus curve b changes sign, in x, low to high; with ``rising``, only
+    where it goes from below 0 to above (a overtakes b).
 
     Each curve is given at its own positive x (for example compression ratios), at least
     two, strictly ascending; the ranges of x must overlap. Both curves are interpolated
@@ -313,7 +314,10 @@ def crossings(x_a, y_a, x_b, y_b) -> list[float]:
     grid = grid[(grid >= low) & (grid <= high)]
     diff = np.interp(grid, xa, ya) - np.interp(grid, xb, yb)
     points = []
-    for i in np.nonzero(np.sign(diff[:-1]) * np.sign(diff[1:]) < 0)[0]:
+    changes = np.sign(diff[:-1]) * np.sign(diff[1:]) < 0
+    if rising:
+        changes &= diff[:-1] < 0
+    for i in np.nonzero(changes)[0]:
         t = diff[i] / (diff[i] - diff[i + 1])
         points.append(float(np.exp(grid[i] + t * (grid[i + 1] - grid[i]))))
     return points
@@ -352,9 +356,10 @@ def bootstrap_crossing(
     draws: int = 2000,
     level: float = 0.95,
     seed: int = 0,
+    rising: bool = False,
 ) -> CrossingInterval:
-    """The first crossing of the mean curves of ``a`` and ``b`` (``crossings``), with a
-    parametric bootstrap interval.
+    """The first crossing of the mean curves of ``a`` and ``b`` (``crossings``; with
+    ``rising``, the first where a overtakes b), with a parametric bootstrap interval.
 
     ``a`` and ``b`` map x (a compression ratio) to the values of the seeds run there, at
     least two per point. Each simulated curve draws every point's mean from its Student-t
@@ -366,12 +371,12 @@ def bootstrap_crossing(
     level = validation.fraction("level", level)
     rng = np.random.default_rng(validation.seed("seed", seed))
     (xa, ma, sa, da), (xb, mb, sb, db) = _mean_curve("a", a), _mean_curve("b", b)
-    first = crossings(xa, ma, xb, mb)
+    first = crossings(xa, ma, xb, mb, rising)
     found = []
     for _ in range(draws):
         ya = ma + sa * rng.standard_t(da)
         yb = mb + sb * rng.standard_t(db)
-        points = crossings(xa, ya, xb, yb)
+        points = crossings(xa, ya, xb, yb, rising)
         if points:
             found.append(points[0])
     tail = 100 * (1 - level) / 2

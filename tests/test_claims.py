@@ -189,6 +189,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
                 "setting": int(ratio),
                 "seed": seed,
                 "compression": sgb_ratio,
+                "compression_authors": 1.02 * sgb_ratio,
                 "accuracy": 0.7 - 0.4 * (ratio > 500) + 0.004 * rng.standard_normal(),
             }
     sgb_full = {"variants": {"authors": {}}, "cells": cells}
@@ -223,16 +224,38 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     assert near_200.test.estimate == pytest.approx(-10.0, abs=1.0) and near_200.test.n == 3
     assert near_700.verdict in verdicts.IN_DIRECTION
     assert near_700.test.estimate == pytest.approx(10.0, abs=1.0)
-    # the curves cross where the 10-point lead changes hands, halfway in log(ratio)
-    cross = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
-    assert cross.key == "fig2.full.crossover" and cross.verdict == verdicts.REPRODUCED
-    assert 300 < cross.test.low < cross.test.estimate < cross.test.high < 500
-    behind = claims.figure2_full_crossover(rows[:1], sgb_full, {"cells": dgb}, 500, "x")
-    assert behind.verdict == verdicts.CONTRADICTED  # the highest ratio's row decides
-    for name, cell in dgb.items():  # the DGB far above the SGB at every ratio
+    # the curves cross where the 10-point lead changes hands, halfway in log(ratio), under
+    # either count of compression
+    ours, authors = claims.figure2_full_crossover(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    assert ours.setting.split(";")[0].endswith(", our count")
+    assert authors.setting.split(";")[0].endswith(", the authors' count")
+    for cross in (ours, authors):
+        assert cross.key == "fig2.full.crossover" and cross.verdict == verdicts.REPRODUCED
+        assert cross.test.low < cross.test.estimate < cross.test.high
+    assert 300 < ours.test.low and ours.test.high < 500
+    for name, cell in dgb.items():  # the DGB far above the SGB at every ratio: no crossing
         cell["records"][-1]["test_accuracy"] += 0.5 * name.startswith("700")
-    apart = claims.figure2_full_crossover(rows, sgb_full, {"cells": dgb}, 500, "x")
-    assert apart.test is None and "0% of simulated curves cross" in apart.setting
+    for apart in claims.figure2_full_crossover(sgb_full, {"cells": dgb}, 500, "x"):
+        assert apart.test is None and "0% of simulated curves cross" in apart.setting
+        assert apart.verdict == verdicts.CONTRADICTED
+
+
+def test_a_crossover_counts_only_the_sgb_overtaking_the_dgb():
+    """The SGB above the DGB at low compression and below at high crosses the wrong way:
+    no crossover (contradicted); curves whose simulated crossings come and go are
+    inconclusive."""
+    seeds = np.array([-0.01, 0.0, 0.01])
+    ratios = (10.0, 100.0, 1000.0)
+    sgb = {r: a + seeds for r, a in zip(ratios, (0.8, 0.7, 0.5), strict=True)}
+    dgb = {r: a + seeds for r, a in zip(ratios, (0.7, 0.75, 0.6), strict=True)}
+    wrong_way = claims.crossover_row(sgb, dgb, "toy", "fig2.crossover", "b", None)
+    assert wrong_way.verdict == verdicts.CONTRADICTED and wrong_way.test is None
+    right_way = claims.crossover_row(dgb, sgb, "toy", "fig2.crossover", "b", None)
+    assert right_way.verdict == verdicts.REPRODUCED
+    close = {r: v + 0.06 * (r == 1000.0) for r, v in sgb.items()}  # 0.56 vs 0.6: unsure
+    wide = {r: v * 0 + v.mean() + np.array([-0.1, 0.0, 0.1]) for r, v in dgb.items()}
+    unsure = claims.crossover_row(close, wide, "toy", "fig2.crossover", "b", None)
+    assert unsure.verdict == verdicts.INCONCLUSIVE and unsure.decide.startswith("more seeds")
 
 
 def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
