@@ -38,6 +38,7 @@ def _brax_populations(load: Loader, card: prose.Card) -> dict[str, str]:
     return (
         prose.backends(load("rl/bench_backends.json"))
         | prose.regime(load("rl/regime_ant_cpu.json"))
+        | prose.regime_peer(load("rl/regime_peer_ant_cpu.json", missing_ok=True))
         | prose.regime_populations(load("rl/regime_populations_ant_cpu.json", missing_ok=True))
         | prose.populations(load("rl/populations_ant_cpu.json"))
         | prose.figure3(*fig3, card)

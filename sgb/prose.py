@@ -106,6 +106,31 @@ def regime(payload: Payload) -> dict[str, str]:
     } | texts
 
 
+def regime_peer(payload: Payload | None) -> dict[str, str]:
+    """The regime beside the authors' own code at their peer budget
+    (``sgb.experiments.regime_peer``), at the last step of each run label (``vanilla``,
+    ``aliased``): our seeds' returns and the interval of one more run
+    (``peer_{label}_ours``), the authors' return (``peer_{label}_theirs``) and whether it
+    lies inside (``peer_{label}_inside``)."""
+    out = {}
+    rows = [] if payload is None else payload["results"]["comparison"]
+    for name, label in (("vanilla", "vanilla"), ("aliased", "k64_aliased")):
+        mine = [r for r in rows if r["label"] == label and r["theirs"] is not None]
+        last = mine[-1] if mine else None
+        if last is None or last["interval"] is None:
+            out |= {f"peer_{name}_{part}": NOT_RUN for part in ("ours", "theirs", "inside")}
+            continue
+        returns = ", ".join(f"{r:.0f}" for r in last["ours"])
+        low, high = last["interval"]
+        out[f"peer_{name}_ours"] = (
+            f"{returns} at {last['step']:,} steps (mean {last['mean']:.0f}; one more run "
+            f"within [{low:.0f}, {high:.0f}], 95 %)"
+        )
+        out[f"peer_{name}_theirs"] = f"{last['theirs']:.1f}"
+        out[f"peer_{name}_inside"] = "inside" if last["inside"] else "outside"
+    return out
+
+
 def populations(payload: Payload | None) -> dict[str, str]:
     """The populations experiment (``rl/populations_ant_cpu.json``): ``pop_complete``
     (genomes summarised) and, per genome settings, its Figure 5 and 4E rows

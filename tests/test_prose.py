@@ -165,3 +165,21 @@ def test_the_variability_texts_are_the_rows_of_each_setting():
     ours = [r for r in card["title.variability"] if ", our genome, " in r.setting]
     assert texts["variability_ours"].count("**") == 2 * len(ours) > 0
     assert set(prose.variability({}).values()) == {prose.NOT_RUN}
+
+
+def test_the_peer_texts_set_the_authors_run_against_the_interval_of_ours():
+    """Three seeds of ours, the authors' one run inside their interval for vanilla and
+    outside it for the aliased layer; nothing from a point they did not evaluate."""
+    from sgb.experiments import regime_peer
+
+    def run(label: str, last: list[float]) -> list[dict]:
+        steps = list(regime_peer.THEIR_STEPS)
+        return [{"label": label, "eval_steps": steps, "eval_returns": [0.0, 0.0, x]} for x in last]
+
+    runs = run("vanilla", [250.0, 300.0, 350.0]) + run("k64_aliased", [-100.0, -90.0, -110.0])
+    payload = {"results": {"comparison": regime_peer.compare(runs)}}
+    texts = prose.regime_peer(payload)
+    assert texts["peer_vanilla_ours"].startswith("250, 300, 350 at 1,638,400 steps (mean 300")
+    assert (texts["peer_vanilla_theirs"], texts["peer_vanilla_inside"]) == ("279.8", "inside")
+    assert (texts["peer_aliased_theirs"], texts["peer_aliased_inside"]) == ("-351.2", "outside")
+    assert set(prose.regime_peer(None).values()) == {prose.NOT_RUN}
