@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from reach import EPISODE, SHARED_STEP, shared_step_config
 
-from sgb.experiments import fig3, fig4_5, get_experiment, rl_spread
+from sgb.experiments import fig3, fig4_5, get_experiment, regime_peer, rl_spread
 from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.rl import protocols
@@ -62,7 +62,8 @@ def test_sweep_trains_vanilla_once_and_each_sgb_count_under_each_settings():
 
 
 def test_the_one_checkpoint_name_gives_every_committed_checkpoint_its_name():
-    """Figure 3's, the spread sweep's and the regime's committed runs: each run's recorded
+    """Figure 3's, the spread sweep's and the regime's committed runs (and the regime's peer
+    runs, apart in ``peer/``): each run's recorded
     checkpoint is the name ``checkpoint_name`` makes from its config, and every committed
     checkpoint, and every one a results file names, is the name of a run of a cpu config."""
     results = committed_results()
@@ -96,7 +97,8 @@ def test_the_one_checkpoint_name_gives_every_committed_checkpoint_its_name():
         for seed in spread.seeds
     }
     made |= {r.checkpoint("cpu") for r in RUNS["cpu"].runs}
-    committed = {p.name for p in (results / "rl" / "checkpoints").glob("*.msgpack")}
+    made |= {r.checkpoint("cpu") for r in regime_peer.PROFILES["cpu"].runs}  # in peer/
+    committed = {p.name for p in (results / "rl" / "checkpoints").rglob("*.msgpack")}
     named = {
         name
         for path in results.rglob("*.json")
