@@ -19,6 +19,10 @@ from sgb.results import load as load_results
 Loader = Callable[..., dict | None]  # results.load with the results directory bound
 
 
+def _jensen_gap(load: Loader, card: prose.Card) -> dict[str, str]:
+    return prose.descent(card)
+
+
 def _dgb_vs_sgb(load: Loader, card: prose.Card) -> dict[str, str]:
     fashion = load("fig2_fashion-mnist_cpu.json")["results"]
     dense = fashion["ours"]["summary"]["dense"]["mean"][0]
@@ -61,12 +65,14 @@ def _beyond_the_paper(load: Loader, card: prose.Card) -> dict[str, str]:
 
 # chapter (its notebook's stem) -> its texts from the results and the scorecard's rows
 CHAPTERS: dict[str, Callable[[Loader, prose.Card], dict[str, str]]] = {
+    "03_jensen_gap": _jensen_gap,
     "04_dgb_vs_sgb": _dgb_vs_sgb,
     "05_brax_populations": _brax_populations,
     "06_beyond_the_paper": _beyond_the_paper,
 }
 # names a chapter glues from what it computes while it runs, not from results files
 COMPUTED = {
+    "03_jensen_gap": frozenset(),
     "04_dgb_vs_sgb": frozenset({"nominal_30_real", "nominal_1500_real"}),
     "05_brax_populations": frozenset({"walk_sigma_narrow", "walk_sigma_wide", "walk_steps"}),
     "06_beyond_the_paper": frozenset(),

@@ -504,6 +504,26 @@ def _leads(rows: list[Row]) -> str:
     return "; ".join(parts)
 
 
+def descent(card: Card) -> dict[str, str]:
+    """Theorem A.2's conclusion at the end of training (``claims.descent_rows``): the double
+    well's row (``a2_toy``) and the digits classifiers' (``a2_networks``), each its gap with
+    its 95 % interval and verdict."""
+    rows = card.get("theorem.A.2", [])
+    toy = [r for r in rows if "double well" in r.setting]
+    networks = [r for r in rows if r.setting.startswith("digits classifier, ")]
+    if not toy:
+        return {"a2_toy": NOT_RUN, "a2_networks": NOT_RUN}
+    kinds = [r.setting.removeprefix("digits classifier, ").split(", at")[0] for r in networks]
+    return {
+        "a2_toy": f"{toy[0].setting.removeprefix('1-D double well ')}: {toy[0].ours}, "
+        f"**{toy[0].verdict}**",
+        "a2_networks": "; ".join(
+            f"{kind}: {r.ours}, **{r.verdict}**" for kind, r in zip(kinds, networks, strict=True)
+        )
+        or NOT_RUN,
+    }
+
+
 def kl_share(card: Card) -> dict[str, str]:
     """Section 2.1's KL explanation at about 10x (``claims.kl_share_row``): the row's texts
     (``kl_share_*``) and the DGB's lead it is weighed against (``kl_share_lead``)."""
