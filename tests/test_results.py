@@ -75,8 +75,11 @@ def test_provenance_line_names_profile_seeds_commits_date_and_wall_time():
     assert "\n" not in line
     assert line.startswith(f"profile {record['profile']}, seeds {record['seeds']}, ")
     assert all(commit[:10] in line for commit in record["git_commits"])
-    budget = results.provenance_line(raw("dgb_budget_fashion-mnist_cpu.json"))
-    assert budget.count("9dbd713a4e,") == 1 and "9dbd713a4e+dirty" in budget  # each once
+    commits = ["9dbd713a4e" + "0" * 30, "9dbd713a4e" + "0" * 30 + "+dirty", "c7ecc8e69f" * 4]
+    mixed = {**payload, "provenance": {**record, "git_commits": commits}}
+    several = results.provenance_line(mixed)
+    assert several.count("9dbd713a4e,") == 1 and "9dbd713a4e+dirty" in several  # each once
+    assert "c7ecc8e69f" in several
     assert record["date"][:10] in line
     assert f"{record['wall_time_s'] / 60:.0f} min on {record['backend']}" in line
 
