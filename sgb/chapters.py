@@ -43,6 +43,7 @@ def _brax_populations(load: Loader, card: prose.Card) -> dict[str, str]:
         prose.backends(load("rl/bench_backends.json"))
         | prose.regime(load("rl/regime_ant_cpu.json"))
         | prose.regime_peer(load("rl/regime_peer_ant_cpu.json", missing_ok=True))
+        | prose.regime_gait(load("rl/regime_gait_ant_cpu.json", missing_ok=True))
         | prose.regime_populations(load("rl/regime_populations_ant_cpu.json", missing_ok=True))
         | prose.populations(load("rl/populations_ant_cpu.json"))
         | prose.figure3(*fig3, card)

@@ -106,6 +106,29 @@ def regime(payload: Payload) -> dict[str, str]:
     } | texts
 
 
+def regime_gait(payload: Payload | None) -> dict[str, str]:
+    """Whether the regime's agents walk (``sgb.experiments.regime_gait``): each arm's runs'
+    forward speeds by seed (``gait_runs``) and how many walk, at least the file's walking
+    speed (``gait_walks``)."""
+    runs = [] if payload is None else payload["results"]["runs"]
+    if not runs:
+        return {"gait_runs": NOT_RUN, "gait_walks": NOT_RUN}
+    arms = []
+    # vanilla first, then from the most cell types to the fewest
+    for k in sorted({r["cell_types"] for r in runs}, key=lambda k: (k is not None, -(k or 0))):
+        mine = sorted((r for r in runs if r["cell_types"] == k), key=lambda r: r["seed"])
+        speeds = ", ".join(f"{r['forward_velocity']:.2f}" for r in mine)
+        seeds = ", ".join(str(r["seed"]) for r in mine)
+        which = f"seed{'s' * (len(mine) > 1)} {seeds}"
+        arms.append(f"{'vanilla' if k is None else f'{k} types'} {speeds} m/s ({which})")
+    walking = sum(r["walks"] for r in runs)
+    speed = payload["results"]["walking_speed"]
+    return {
+        "gait_runs": "; ".join(arms),
+        "gait_walks": f"{walking} of the {len(runs)} runs walk (at least {speed:g} m/s)",
+    }
+
+
 def regime_peer(payload: Payload | None) -> dict[str, str]:
     """The regime beside the authors' own code at their peer budget
     (``sgb.experiments.regime_peer``), at the last step of each run label (``vanilla``,

@@ -183,3 +183,20 @@ def test_the_peer_texts_set_the_authors_run_against_the_interval_of_ours():
     assert (texts["peer_vanilla_theirs"], texts["peer_vanilla_inside"]) == ("279.8", "inside")
     assert (texts["peer_aliased_theirs"], texts["peer_aliased_inside"]) == ("-351.2", "outside")
     assert set(prose.regime_peer(None).values()) == {prose.NOT_RUN}
+
+
+def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
+    """Vanilla first, then the most cell types to the fewest; a run below the walking
+    speed is not counted as walking."""
+
+    def run(k, seed, speed):
+        return {"cell_types": k, "seed": seed, "forward_velocity": speed, "walks": speed >= 1}
+
+    runs = [run(16, 0, 0.4), run(None, 1, 7.0), run(128, 0, 8.0), run(None, 0, 7.5)]
+    texts = prose.regime_gait({"results": {"walking_speed": 1.0, "runs": runs}})
+    assert texts["gait_runs"] == (
+        "vanilla 7.50, 7.00 m/s (seeds 0, 1); 128 types 8.00 m/s (seed 0); "
+        "16 types 0.40 m/s (seed 0)"
+    )
+    assert texts["gait_walks"] == "3 of the 4 runs walk (at least 1 m/s)"
+    assert set(prose.regime_gait(None).values()) == {prose.NOT_RUN}
