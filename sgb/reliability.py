@@ -114,9 +114,7 @@ def between_sd_bound(split: VarianceSplit) -> float:
     within = validation.non_negative("split.within_var", split.within_var)
     if icc_high == 1:
         raise ValueError("split.icc_ci[1] must be below 1: at 1 the bound is infinite")
-    if icc_high <= 0:
-        return 0.0
-    return math.sqrt(icc_high / (1 - icc_high) * within)
+    return between_sd_at(icc_high, within)
 
 
 def between_sd_at(icc: float, within_var: float) -> float:
