@@ -25,6 +25,7 @@ shared between processes as Figure 3's are (``sgb.rl.runs.train_runs``,
 checkpoint (``"complete": false`` until all are).
 """
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -33,26 +34,18 @@ from sgb.profiles import check_profile
 from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
-from sgb.rl.regime_runs import RUNS, run_config
+from sgb.rl.regime_runs import RUNS, run_config, train_regime
 from sgb.rl.regimes import authors_scale
-from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem, train_runs
+from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
 
 
 def run(profile: str, out_dir: Path) -> Path:
     """Train every run not yet trained (each one resumable), writing the results file
     after each."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_ant")
-    config = recording.config
-    runs = [
-        (
-            f"regime ant {r.label} seed {r.seed}",
-            run_config(config, r),
-            r.seed,
-            Path(out_dir) / CHECKPOINT_DIR / r.checkpoint(profile),
-        )
-        for r in config.runs
-    ]
-    return train_runs(runs, profile, lambda: write_regime(recording, Path(out_dir)))
+    checkpoints = Path(out_dir) / CHECKPOINT_DIR
+    write = functools.partial(write_regime, recording, Path(out_dir))
+    return train_regime(recording.config, profile, checkpoints, "regime ant", write)
 
 
 def queued(profile: str, results_dir: Path) -> Queue:

@@ -11,6 +11,7 @@ prediction interval of one more run of ours (mean +- t(n - 1) SD sqrt(1 + 1/n) o
 seeds): one run of theirs inside it is what runs of one regime would give.
 """
 
+import functools
 from dataclasses import replace
 from pathlib import Path
 
@@ -19,8 +20,8 @@ from scipy import stats as scipy_stats
 
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.recording import Recording, start
-from sgb.rl.regime_runs import RUNS, RegimeRun, RegimeRuns, run_config
-from sgb.rl.runs import CHECKPOINT_DIR, finished_run, train_runs
+from sgb.rl.regime_runs import RUNS, RegimeRun, RegimeRuns, run_config, train_regime
+from sgb.rl.runs import CHECKPOINT_DIR, finished_run
 
 STEPS = 1_638_400  # 10 updates of 2048 environments x 5 steps x 16 unrolls
 EVAL_ENVS = 256  # the size of their recorded evaluations
@@ -57,17 +58,9 @@ PROFILES = {p: peer_config(p) for p in PROFILE_NAMES}
 def run(profile: str, out_dir: Path) -> Path:
     """Train every run not yet trained (each resumable), writing the results after each."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_peer_ant")
-    config = recording.config
-    runs = [
-        (
-            f"regime peer {r.label} seed {r.seed}",
-            run_config(config, r),
-            r.seed,
-            Path(out_dir) / PEER_DIR / r.checkpoint(profile),
-        )
-        for r in config.runs
-    ]
-    return train_runs(runs, profile, lambda: write_peer(recording, Path(out_dir)))
+    checkpoints = Path(out_dir) / PEER_DIR
+    write = functools.partial(write_peer, recording, Path(out_dir))
+    return train_regime(recording.config, profile, checkpoints, "regime peer", write)
 
 
 def prediction_interval(values) -> tuple[float, float]:

@@ -2,13 +2,15 @@
 (``sgb.experiments.regime`` trains them): each run's cell types, seed and genome settings,
 their order, their PPO settings and checkpoint names, at each profile (``RUNS``)."""
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from sgb import validation
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_regime, with_settings
-from sgb.rl.runs import checkpoint_name
+from sgb.rl.runs import checkpoint_name, train_runs
 from sgb.rl.sweep import ppo_settings
 
 GENOMES = ("authors", "authors_aliased")  # a Gaussian per type pair; their aliased layers
@@ -103,6 +105,23 @@ def run_config(config: RegimeRuns, run: RegimeRun) -> PPOConfig:
     ppo = with_settings(ppo, "authors")
     aliased = run.genome == "authors_aliased"
     return replace(ppo, network=replace(ppo.network, aliased_pairs=aliased))
+
+
+def train_regime(
+    config: RegimeRuns, profile: str, checkpoints: Path, name: str, write: Callable[[], Path]
+) -> Path:
+    """Train each run of ``config`` not yet trained into ``checkpoints`` (``sgb.rl.runs.
+    train_runs``, labelled ``name``), calling ``write`` after each; the results file."""
+    runs = [
+        (
+            f"{name} {r.label} seed {r.seed}",
+            run_config(config, r),
+            r.seed,
+            checkpoints / r.checkpoint(profile),
+        )
+        for r in config.runs
+    ]
+    return train_runs(runs, profile, write)
 
 
 RUNS = {p: regime_config(p) for p in PROFILE_NAMES}
