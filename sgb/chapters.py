@@ -1,75 +1,43 @@
-"""What each chapter glues into its prose from the committed results: one table, chapter
--> its texts (glue name -> text), read by the chapter itself and by its test.
+"""What each chapter glues into its prose from the results: one table, chapter -> the
+experiments whose texts it glues, read by the chapter itself and by its test.
 
     book.glue_all(chapters.texts("05_brax_populations", RESULTS))
 
-A chapter glues a few more values it computes while it runs (``COMPUTED``); every other
-``{glue}`` name of its prose is a key of ``texts``.
+Each experiment's module has ``texts(records, card) -> dict`` (glue name -> text, from its
+results and the scorecard's rows). A chapter glues a few more values it computes while
+it runs (``COMPUTED``); every other ``{glue}`` name of its prose is a key of ``texts``.
 """
 
-import functools
-from collections.abc import Callable
 from pathlib import Path
 
-from sgb import claims, prose
-from sgb.experiments import rl_spread
-from sgb.paths import committed_results
-from sgb.results import load as load_results
-
-Loader = Callable[..., dict | None]  # results.load with the results directory bound
+from sgb import claims, gather, prose
+from sgb.experiments import EXPERIMENTS
+from sgb.results import Records
 
 
-def _jensen_gap(load: Loader, card: prose.Card) -> dict[str, str]:
-    return prose.descent(card)
+def _backends(records: Records, card: prose.Card) -> dict[str, str]:
+    return prose.backends(records("bench_backends"))
 
 
-def _dgb_vs_sgb(load: Loader, card: prose.Card) -> dict[str, str]:
-    fashion = load("fig2_fashion-mnist_cpu.json")["results"]
-    dense = fashion["ours"]["summary"]["dense"]["mean"][0]
-    return (
-        prose.figure2(fashion, card)
-        | prose.mean_gap(load("mean_gap_fashion-mnist_cpu.json")["results"])
-        | prose.dgb_budget(load("dgb_budget_fashion-mnist_cpu.json")["results"], dense)
-        | prose.sgb_full(load("sgb_full_fashion-mnist_cpu.json"))
-        | prose.figure2_full(load("dgb_full_fashion-mnist_cpu.json"), card)
-        | prose.supervised_population(card)
-        | prose.kl_share(card)
-    )
-
-
-def _brax_populations(load: Loader, card: prose.Card) -> dict[str, str]:
-    fig3 = [load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
-    return (
-        prose.backends(load("rl/bench_backends.json"))
-        | prose.regime(load("rl/regime_ant_cpu.json"))
-        | prose.regime_peer(load("rl/regime_peer_ant_cpu.json", missing_ok=True))
-        | prose.regime_gait(load("rl/regime_gait_ant_cpu.json", missing_ok=True))
-        | prose.regime_populations(load("rl/regime_populations_ant_cpu.json", missing_ok=True))
-        | prose.populations(load("rl/populations_ant_cpu.json"))
-        | prose.figure3(*fig3, card)
-        | prose.figures4_5(card)
-        | prose.variability(card)
-        | rl_spread.spread_prose(load("rl/spread_ant_cpu.json")["results"]["runs"])
-    )
-
-
-def _beyond_the_paper(load: Loader, card: prose.Card) -> dict[str, str]:
-    return (
-        prose.evolution(load("evolution_digits_cpu.json"))
-        | prose.bet_hedging(load("rl/bet_hedging_ant_cpu.json", missing_ok=True))
-        | prose.innate_start(
-            load("rl/innate_start_ant_cpu.json", missing_ok=True),
-            load("innate_start_supervised_fashion-mnist_cpu.json", missing_ok=True),
-        )
-    )
-
-
-# chapter (its notebook's stem) -> its texts from the results and the scorecard's rows
-CHAPTERS: dict[str, Callable[[Loader, prose.Card], dict[str, str]]] = {
-    "03_jensen_gap": _jensen_gap,
-    "04_dgb_vs_sgb": _dgb_vs_sgb,
-    "05_brax_populations": _brax_populations,
-    "06_beyond_the_paper": _beyond_the_paper,
+# name -> texts(records, card): each experiment's, and the benchmark of Brax's backends
+SOURCES = {name: e.texts for name, e in EXPERIMENTS.items() if e.texts} | {
+    "bench_backends": _backends
+}
+# chapter (its notebook's stem) -> the sources whose texts it glues
+CHAPTERS = {
+    "03_jensen_gap": ("theory",),
+    "04_dgb_vs_sgb": ("fig2", "mean_gap", "dgb_budget", "sgb_full"),
+    "05_brax_populations": (
+        "bench_backends",
+        "regime",
+        "regime_peer",
+        "regime_gait",
+        "populations",
+        "fig3",
+        "fig4",
+        "spread",
+    ),
+    "06_beyond_the_paper": ("evolution", "bet_hedging", "innate_start"),
 }
 # names a chapter glues from what it computes while it runs, not from results files
 COMPUTED = {
@@ -87,7 +55,10 @@ def texts(
     committed ones) and the scorecard's rows ``card`` (computed from them if ``None``)."""
     if chapter not in CHAPTERS:
         raise ValueError(f"no texts for chapter {chapter!r}; chapters: {', '.join(CHAPTERS)}")
-    results_dir = committed_results() if results_dir is None else Path(results_dir)
+    records = gather.records(results_dir)
     if card is None:
-        card = claims.by_key(claims.scorecard(results_dir))
-    return CHAPTERS[chapter](functools.partial(load_results, results_dir=results_dir), card)
+        card = claims.by_key(gather.scorecard(results_dir))
+    found: dict[str, str] = {}
+    for name in CHAPTERS[chapter]:
+        found |= SOURCES[name](records, card)
+    return found

@@ -50,6 +50,50 @@ def load(
     return payload
 
 
+class Records:
+    """The results files of ``results_dir`` (default: the committed ones), each named by
+    its experiment (a key of the registry ``sgb.experiments.EXPERIMENTS``) and part (a
+    body, a dataset, or ``""`` for an experiment of one file), read once each through
+    ``load``. ``files`` maps experiment -> part -> file name, as the registry declares them.
+
+        records("fig3", "ant")        # the payload, or FileNotFoundError naming the file
+        records.get("regime_peer")    # the payload, or None where it was never run
+    """
+
+    def __init__(
+        self, files: dict[str, dict[str, str]], results_dir: str | Path | None = None
+    ) -> None:
+        self.files = files
+        self.results_dir = Path(committed_results() if results_dir is None else results_dir)
+        self._read: dict[str, Payload | None] = {}
+
+    def name(self, experiment: str, part: str = "") -> str:
+        """The file name of ``experiment``'s ``part``."""
+        parts = self.files.get(experiment, {})
+        if part not in parts:
+            raise ValueError(
+                f"experiment {experiment!r} declares no results file {part!r}: {sorted(parts)}"
+            )
+        return parts[part]
+
+    def get(self, experiment: str, part: str = "") -> Payload | None:
+        """The payload of ``experiment``'s ``part``, or None if it is absent."""
+        name = self.name(experiment, part)
+        if name not in self._read:
+            self._read[name] = load(name, self.results_dir, missing_ok=True)
+        return self._read[name]
+
+    def __call__(self, experiment: str, part: str = "") -> Payload:
+        """The payload of ``experiment``'s ``part``; FileNotFoundError if it is absent."""
+        payload = self.get(experiment, part)
+        if payload is None:
+            file = self.results_dir / self.name(experiment, part)
+            raise FileNotFoundError(
+                f"no results file {file}: run `python -m sgb reproduce {experiment}` for it"
+            )
+        return payload
+
+
 def _duration(seconds: float) -> str:
     if seconds < 120:
         return f"{seconds:.0f} s"

@@ -10,7 +10,7 @@ import json
 import math
 from pathlib import Path
 
-from sgb import chapters, claims, manifest, scorecard
+from sgb import chapters, claims, gather, manifest, scorecard
 from sgb.paths import committed_results
 
 SNAPSHOT = Path(__file__).resolve().parent / "data" / "snapshot.json"
@@ -20,7 +20,7 @@ def current() -> dict:
     """The results' digests, each scorecard row (its key, its table's columns and its p
     after Holm's correction), the scorecard page's sha256 and every chapter's texts."""
     results_dir = committed_results()
-    rows = claims.scorecard(results_dir)
+    rows = gather.scorecard(results_dir)
     card = claims.by_key(rows)
     table = claims.table(rows).to_dict("records")
     holm = ["-" if math.isnan(q) else f"{q:.6g}" for q in scorecard.holm_p(rows)]

@@ -6,7 +6,17 @@ import json
 import numpy as np
 import pytest
 
-from sgb import claims, verdicts
+from sgb import claims, gather, verdicts
+from sgb.experiments import (
+    bet_hedging,
+    evolution,
+    fig2,
+    innate_start,
+    innate_start_supervised,
+)
+from sgb.experiments import populations as population_runs
+from sgb.experiments import sgb_full as sgb_full_runs
+from sgb.experiments import theory as theory_runs
 from sgb.paths import committed_results
 from sgb.provenance import _jsonable
 from sgb.reliability import (
@@ -48,7 +58,7 @@ def test_figure3_verdicts_on_sweeps_with_known_falls():
 
 
 def test_the_committed_scorecard_gives_every_claim_one_verdict():
-    rows = claims.scorecard(committed_results())
+    rows = gather.scorecard(committed_results())
     assert {r.verdict for r in rows} <= set(verdicts.VERDICTS)
     keys = {r.key.split(".")[0] + "." + r.key.split(".")[1] for r in rows}
     assert {"fig2.sgb_better_high", "fig4e.r_legs", "fig5.population_beats_mean"} <= keys
@@ -69,9 +79,9 @@ def test_the_sigma_law_row_tells_the_appendix_step_from_the_elbo_step():
             "runs": {"softplus": {"settled_mean": [0.01, settled], "settled_sd": [0.01, 0.002]}},
         }
 
-    (at_fixed_point,) = claims.sigma_law_rows(toy(0.2187))
+    (at_fixed_point,) = theory_runs.sigma_law_rows(toy(0.2187))
     assert at_fixed_point.verdict == verdicts.CONTRADICTED  # sigma stays at sqrt(c/(H+c lambda))
-    (at_zero,) = claims.sigma_law_rows(toy(0.001))
+    (at_zero,) = theory_runs.sigma_law_rows(toy(0.001))
     assert at_zero.verdict == verdicts.REPRODUCED  # what the appendix's step predicts
 
 
@@ -96,7 +106,7 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
             }
     config = populations.populations_config("cpu")
     results = populations.summarise({"genomes": genomes}, config)
-    rows = {(r.key, r.setting.split(",")[1]): r for r in claims.populations_rows(results)}
+    rows = {(r.key, r.setting.split(",")[1]): r for r in population_runs.populations_rows(results)}
     for who in (" our genome", " the authors' genome"):
         assert rows["fig5.population_beats_mean", who].verdict in verdicts.IN_DIRECTION
         assert rows["fig4e.r_legs", who].verdict in verdicts.IN_DIRECTION
@@ -123,7 +133,7 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     genome = {"training_seed": 0, "parts": {k: {"returns": v.tolist()} for k, v in parts.items()}}
     genome["summary"] = populations.genome_summary(parts)
     stored = json.loads(json.dumps(_jsonable({"genomes": {"regime": genome}})))
-    rows = claims.regime_population_rows(stored)
+    rows = population_runs.regime_population_rows(stored)
     fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
     assert fig5[0].verdict in verdicts.IN_DIRECTION
     assert fig5[0].test.estimate == pytest.approx(5.0, abs=0.5)  # % of the mean network
@@ -142,7 +152,7 @@ def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
         for model, shift in (("sgb", 0.05 if ratio > 50 else -0.05), ("dgb", 0.0))
         for seed, acc in enumerate(0.8 + shift + 0.002 * rng.standard_normal(4))
     ]
-    table = claims.figure2_ratio_tests({"records": records})
+    table = fig2.figure2_ratio_tests({"records": records})
     assert list(table.index) == [10, 100, 700]
     expected = np.array([-5.0, 5.0, 5.0])
     assert np.all(table["95 % CI low"] < expected) and np.all(expected < table["95 % CI high"])
@@ -168,12 +178,12 @@ def test_sgb_variant_tests_find_a_known_shift_and_skip_ratios_without_two_seeds(
         for seed in range(4)
     }
     cells["rho_ours_700.0_0"] = {**cells["authors_700.0_0"], "variant": "rho_ours"}
-    table = claims.sgb_variant_tests({"cells": cells}, "rho_ours")
+    table = sgb_full_runs.sgb_variant_tests({"cells": cells}, "rho_ours")
     assert list(table.index) == [10, 400]
     assert np.all(table["95 % CI low"] < [3.0, 0.0]) and np.all([3.0, 0.0] < table["95 % CI high"])
     assert table["p"].iloc[0] < 1e-3 and table["p"].iloc[1] > 1e-3
     assert set(table["seeds (rho_ours, authors)"]) == {"4, 4"}
-    assert claims.sgb_variant_tests({"cells": cells}, "per_pair").empty
+    assert sgb_full_runs.sgb_variant_tests({"cells": cells}, "per_pair").empty
 
 
 def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfinished_cells():
@@ -213,7 +223,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     dgb["400_0"] = dgb_cell(400.0, 0, 0.5)  # one seed: no test
     dgb["700_3"] = dgb_cell(700.0, 3, 0.9, rounds=475)  # not finished (it ran 475 of 500)
     dgb["700_3"]["records"].pop()
-    rows = claims.figure2_full_rows(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    rows = sgb_full_runs.figure2_full_rows(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
     assert [r.setting for r in rows] == [
         f"Fashion-MNIST, the authors' DGB layout at {d}x (target {t}x), the SGB "
         f"(KL per synapse, rho from -7: the authors') at {s}x"
@@ -226,7 +236,9 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     assert near_700.test.estimate == pytest.approx(10.0, abs=1.0)
     # the curves cross where the 10-point lead changes hands, halfway in log(ratio), under
     # either count of compression
-    ours, authors = claims.figure2_full_crossover(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    ours, authors = sgb_full_runs.figure2_full_crossover(
+        sgb_full, {"cells": dgb}, 500, "Fashion-MNIST"
+    )
     assert ours.setting.split(";")[0].endswith(", our count")
     assert authors.setting.split(";")[0].endswith(", the authors' count")
     for cross in (ours, authors):
@@ -235,7 +247,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     assert 300 < ours.test.low and ours.test.high < 500
     for name, cell in dgb.items():  # the DGB far above the SGB at every ratio: no crossing
         cell["records"][-1]["test_accuracy"] += 0.5 * name.startswith("700")
-    for apart in claims.figure2_full_crossover(sgb_full, {"cells": dgb}, 500, "x"):
+    for apart in sgb_full_runs.figure2_full_crossover(sgb_full, {"cells": dgb}, 500, "x"):
         assert apart.test is None and "0% of simulated curves cross" in apart.setting
         assert apart.verdict == verdicts.CONTRADICTED
 
@@ -278,7 +290,7 @@ def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
                         "mean_network": accuracy,
                     }
                 )
-    helps, flat = claims.evolution_rows({"dataset": "digits", "records": records})
+    helps, flat = evolution.evolution_rows({"dataset": "digits", "records": records})
     assert helps.verdict in verdicts.IN_DIRECTION
     assert helps.test.estimate == pytest.approx(5.0, abs=0.5)
     assert flat.verdict == verdicts.CONTRADICTED and flat.test.high < 1.0
@@ -288,7 +300,6 @@ def test_bet_hedging_rows_credit_diversified_individuals_and_not_clones_of_clone
     """Three genomes per spread. Wide: each individual thrives on some conditions and
     fails on others while the mean network fails everywhere but at home. Narrow: the
     individuals are the clones, so nothing differs."""
-    from sgb.experiments import bet_hedging
 
     rng = np.random.default_rng(4)
     genomes = []
@@ -313,7 +324,7 @@ def test_bet_hedging_rows_credit_diversified_individuals_and_not_clones_of_clone
                 "scores": bet_hedging.scores(individuals, clones, scale),
             }
         )
-    rows = claims.bet_hedging_rows(json.loads(json.dumps({"genomes": genomes})))
+    rows = bet_hedging.bet_hedging_rows(json.loads(json.dumps({"genomes": genomes})))
     wide, narrow = rows[:2], rows[2:]
     clones_p = [g["scores"]["clones"]["p_at_least"]["0.5"]["10"] for g in genomes[:3]]
     assert 0.25 < min(clones_p) < max(clones_p) < 0.5  # home, and the next condition by chance
@@ -337,7 +348,7 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
                 {"genome": genome, "start": start, "seed": seed, "auc": auc, "eval_steps": [0, 5e6]}
             )
     selections = [{"genome": "g", "individual_means": [1000.0] * 100}]
-    mean, random = claims.innate_start_rows({"runs": runs, "selections": selections})
+    mean, random = innate_start.innate_start_rows({"runs": runs, "selections": selections})
     assert mean.verdict in verdicts.IN_DIRECTION and mean.test.estimate == pytest.approx(
         0.3, abs=0.03
     )
@@ -353,7 +364,7 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
         ]
 
     twin = {"dataset": "digits", "records": [{"runs": runs()} for _ in range(4)]}
-    rows = {r.setting: r for r in claims.innate_supervised_rows(twin)}
+    rows = {r.setting: r for r in innate_start_supervised.innate_supervised_rows(twin)}
     # the head start counts over the epoch (a quarter of it: 12.5 and 7.5 points), not after
     area = rows["digits, from individual, over the epoch"].test
     assert area.estimate == pytest.approx(12.5, abs=0.5)
@@ -407,9 +418,9 @@ def test_the_supervised_population_rows_pair_each_seeds_individuals_with_its_mea
                 "mean_network": mean_network,
                 "accuracy": mean_network + (lead + wobble) / 100,
             }
-    rows = claims.supervised_population_rows({"cells": cells}, "toy")
+    rows = sgb_full_runs.supervised_population_rows({"cells": cells}, "toy")
     assert [r.setting for r in rows] == [
-        f"toy, the SGB ({claims.SGB_VARIANTS[v]}) at 198x" for v in ("authors", "per_pair")
+        f"toy, the SGB ({sgb_full_runs.SGB_VARIANTS[v]}) at 198x" for v in ("authors", "per_pair")
     ]
     authors, per_pair = rows
     assert authors.test.estimate == pytest.approx(5.0) and authors.test.n == 3
@@ -445,7 +456,7 @@ def test_descent_rows_read_the_end_of_training_against_the_second_order_term():
         "trajectories": {"nonconvex": _trajectory(-0.012, 0.0125)},
         "network": [_network(0.0115, 0.008)],
     }
-    toy, network = claims.descent_rows(theory)
+    toy, network = theory_runs.descent_rows(theory)
     assert toy.setting.startswith("1-D double well from mu 0.15, sigma 0.25, after 1 steps")
     assert toy.test.estimate == -0.012 and toy.paper_effect == -0.0125
     assert toy.verdict == verdicts.REPRODUCED
@@ -479,11 +490,11 @@ def test_the_kl_share_row_weighs_the_kls_effect_against_the_dgbs_whole_lead():
     """The DGB 20 points above the authors' SGB: a weaker KL that closes 8 of them is
     reproduced in direction but smaller; one that closes all 20 is reproduced."""
     budget = {"records": [{"rounds": 500, "test_accuracy": 0.80}]}
-    part = claims.kl_share_row(_kl_cells(8.0), budget, "toy")
+    part = sgb_full_runs.kl_share_row(_kl_cells(8.0), budget, "toy")
     assert part.paper_effect == pytest.approx(20.0)
     assert part.test.estimate == pytest.approx(8.0)
     assert part.verdict == verdicts.SMALLER
-    whole = claims.kl_share_row(_kl_cells(20.0), budget, "toy")
+    whole = sgb_full_runs.kl_share_row(_kl_cells(20.0), budget, "toy")
     assert whole.verdict == verdicts.REPRODUCED
     one_seed = {k: c for k, c in _kl_cells(8.0)["cells"].items() if c["seed"] == 0}
-    assert claims.kl_share_row({"cells": one_seed}, budget, "toy") is None
+    assert sgb_full_runs.kl_share_row({"cells": one_seed}, budget, "toy") is None

@@ -8,8 +8,9 @@ b`` is an import of ``sgb.a.b`` where that is a module, else of ``sgb.a``.
 The rules:
 
 - no cycle among the modules;
-- the top layer, ``TOP``, is the command line (``sgb.__main__``) and the background queue
-  that runs it (``sgb.grid``): no other module outside ``sgb.experiments`` imports
+- the top layer, ``TOP``, is the command line (``sgb.__main__``), the background queue
+  that runs it (``sgb.grid``) and the gatherers of the experiments' scorecard rows and
+  texts (``sgb.gather``, ``sgb.chapters``): no other module outside ``sgb.experiments`` imports
   ``sgb.experiments`` or a module under it;
 - no experiment (``sgb.experiments.X``) imports another (``sgb.experiments.Y``) or the
   registry (the package ``sgb.experiments``): what experiments share lies below them;
@@ -27,8 +28,9 @@ import pytest
 PACKAGE = Path(__file__).resolve().parent.parent / "sgb"
 README = PACKAGE.parent / "README.md"
 EXPERIMENTS = "sgb.experiments"
-# the modules that gather the experiments: the command line, the queue, the chapters' texts
-TOP = frozenset({"sgb.__main__", "sgb.grid", "sgb.chapters"})
+# the modules that gather the experiments: the command line, the queue, the scorecard's
+# rows and the chapters' texts
+TOP = frozenset({"sgb.__main__", "sgb.grid", "sgb.gather", "sgb.chapters"})
 
 
 def module_name(path: Path) -> str:

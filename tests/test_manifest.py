@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from sgb import claims, manifest, provenance, results
+from sgb import gather, manifest, provenance, results
 from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.recording import earlier_results, write_results
@@ -76,7 +76,7 @@ def test_the_scorecard_names_a_committed_file_without_provenance_or_results(tmp_
         del payload[part]
         (tmp_path / "rl" / "fig5_ant_cpu.json").write_text(json.dumps(payload))
         with pytest.raises(CorruptFile, match=f"fig5_ant_cpu.json has no {part}; restore it"):
-            claims.scorecard(tmp_path)
+            gather.scorecard(tmp_path)
 
 
 def test_a_directory_in_place_of_a_results_file_is_refused(tmp_path):

@@ -8,7 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sgb import book, chapters, claims, prose, results
+from sgb import book, chapters, claims, gather, prose, results
+from sgb.experiments import fig2, fig3, fig4_5, regime_gait, regime_peer, sgb_full
+from sgb.experiments import populations as population_runs
+from sgb.experiments import regime as regime_runs
 from sgb.paths import committed_results
 
 BOOK = Path(__file__).resolve().parent.parent / "book"
@@ -23,7 +26,7 @@ def prose_names(chapter: str) -> set[str]:
 
 @pytest.fixture(scope="module")
 def card() -> prose.Card:
-    return claims.by_key(claims.scorecard(committed_results()))
+    return claims.by_key(gather.scorecard(committed_results()))
 
 
 @pytest.mark.parametrize("chapter", sorted(chapters.CHAPTERS))
@@ -58,24 +61,24 @@ def test_row_texts_read_the_scorecard_row(card):
 
 
 def test_missing_rows_and_files_give_the_fallback_texts():
-    fig3 = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
-    texts = prose.figure3(*fig3, card={})
+    sweeps = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
+    texts = fig3.figure3(*sweeps, card={})
     for name in ("level_ours", "fall_authors", "cheetah_fall_ours"):
         assert {texts[f"{name}_{part}"] for part in (*prose.ROW_PARTS, "power")} == {"not yet run"}
     assert texts["typing_ours_verdict"] == "not yet run (fewer than 2 seeds)"
     assert texts["ant_vanilla_n"] == "10"  # the sweep's own numbers do not need the card
-    missing = prose.populations(None)
+    missing = population_runs.populations(None)
     assert missing.pop("pop_complete") == "none of the genomes"
     assert set(missing.values()) == {prose.NOT_RUN}
     assert len(missing) == 2 * 2 * len(prose.ROW_PARTS)  # 2 settings x 2 figures
-    assert set(prose.figures4_5({}).values()) == {prose.NOT_RUN}
-    assert set(prose.regime_populations(None).values()) == {prose.NOT_RUN}
+    assert set(fig4_5.figures4_5({}).values()) == {prose.NOT_RUN}
+    assert set(population_runs.regime_populations(None).values()) == {prose.NOT_RUN}
 
 
 def test_the_texts_are_the_files_values():
     regime = results.load("rl/regime_ant_cpu.json")
     vanilla = [r for r in regime["results"]["runs"] if r["cell_types"] is None]
-    texts = prose.regime(regime)
+    texts = regime_runs.regime(regime)
     mean = np.mean([r["final_return"] for r in vanilla])
     assert texts["regime_vanilla"].startswith(f"{mean:.0f}")
     assert texts["regime_vanilla"].endswith(f"over {len(vanilla)} seed" + "s" * (len(vanilla) > 1))
@@ -89,14 +92,14 @@ def test_the_texts_are_the_files_values():
     )
     fashion = results.load("fig2_fashion-mnist_cpu.json")["results"]
     dense = fashion["ours"]["summary"]["dense"]["mean"][0]
-    assert prose.figure2(fashion, {})["f2_dense"] == f"{100 * dense:.1f} %"
+    assert fig2.figure2(fashion, {})["f2_dense"] == f"{100 * dense:.1f} %"
 
 
 def test_regime_without_sgb_arms_says_none():
     regime = results.load("rl/regime_ant_cpu.json")
     summary = regime["results"]["summary"]
     regime["results"]["summary"] = [s for s in summary if s["cell_types"] is None]
-    assert prose.regime(regime)["regime_sgb"] == "none"
+    assert regime_runs.regime(regime)["regime_sgb"] == "none"
 
 
 def test_glue_all_glues_every_text(monkeypatch):
@@ -126,7 +129,7 @@ def test_the_variants_texts_say_a_known_shift_and_a_null_one():
         )
         rewritten[f"rho_ours{i}"] = {**twin, "variant": "rho_ours"}
     full["results"]["cells"] = rewritten
-    texts = prose.sgb_full(full)
+    texts = sgb_full.sgb_full(full)
     assert texts["full_pair_shift"].startswith("+5.0 to +5.0 points over 7 ratios (7 of whose")
     assert texts["full_rho_shift"].startswith("+0.0 to +0.0 points over 7 ratios (0 of whose")
     assert texts["full_rho_mean_shift"].startswith("+0.0 to +0.0 points over 7 ratios")
@@ -142,7 +145,7 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
         **regime,
         "results": {**regime["results"], "runs": [r for r in runs if r["seed"] == 0]},
     }
-    assert prose.regime(seed0)["regime_level"].startswith("no row yet")
+    assert regime_runs.regime(seed0)["regime_level"].startswith("no row yet")
     second = [
         {**r, "seed": 1, "final_return": r["final_return"] + 150.0}
         for r in runs
@@ -150,27 +153,26 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
     ]
     both = {**regime, "results": {**regime["results"], "runs": seed0["results"]["runs"] + second}}
     steps = regime["provenance"]["config"]["ppo"]["total_steps"]
-    (level,) = claims.regime_rows(both["results"], steps)
-    texts = prose.regime(both)
+    (level,) = regime_runs.regime_rows(both["results"], steps)
+    texts = regime_runs.regime(both)
     assert texts["regime_level"] == f"{level.ours}, **{level.verdict}**"
     assert texts["regime_fall"].startswith("no row yet")
 
 
 def test_the_variability_texts_are_the_rows_of_each_setting():
     """The regime's genome, then each setting's genomes, as the scorecard's rows say."""
-    card = claims.by_key(claims.scorecard(committed_results()))
-    texts = prose.variability(card)
+    card = claims.by_key(gather.scorecard(committed_results()))
+    texts = fig4_5.variability(card)
     (regime,) = card["title.variability.regime"]
     assert texts["variability_regime"] == f"{regime.ours} % of the return, **{regime.verdict}**"
     ours = [r for r in card["title.variability"] if ", our genome, " in r.setting]
     assert texts["variability_ours"].count("**") == 2 * len(ours) > 0
-    assert set(prose.variability({}).values()) == {prose.NOT_RUN}
+    assert set(fig4_5.variability({}).values()) == {prose.NOT_RUN}
 
 
 def test_the_peer_texts_set_the_authors_run_against_the_interval_of_ours():
     """Three seeds of ours, the authors' one run inside their interval for vanilla and
     outside it for the aliased layer; nothing from a point they did not evaluate."""
-    from sgb.experiments import regime_peer
 
     def run(label: str, last: list[float]) -> list[dict]:
         steps = list(regime_peer.THEIR_STEPS)
@@ -178,11 +180,11 @@ def test_the_peer_texts_set_the_authors_run_against_the_interval_of_ours():
 
     runs = run("vanilla", [250.0, 300.0, 350.0]) + run("k64_aliased", [-100.0, -90.0, -110.0])
     payload = {"results": {"comparison": regime_peer.compare(runs)}}
-    texts = prose.regime_peer(payload)
+    texts = regime_peer.regime_peer(payload)
     assert texts["peer_vanilla_ours"].startswith("250, 300, 350 at 1,638,400 steps (mean 300")
     assert (texts["peer_vanilla_theirs"], texts["peer_vanilla_inside"]) == ("279.8", "inside")
     assert (texts["peer_aliased_theirs"], texts["peer_aliased_inside"]) == ("-351.2", "outside")
-    assert set(prose.regime_peer(None).values()) == {prose.NOT_RUN}
+    assert set(regime_peer.regime_peer(None).values()) == {prose.NOT_RUN}
 
 
 def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
@@ -193,10 +195,10 @@ def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
         return {"cell_types": k, "seed": seed, "forward_velocity": speed, "walks": speed >= 1}
 
     runs = [run(16, 0, 0.4), run(None, 1, 7.0), run(128, 0, 8.0), run(None, 0, 7.5)]
-    texts = prose.regime_gait({"results": {"walking_speed": 1.0, "runs": runs}})
+    texts = regime_gait.regime_gait({"results": {"walking_speed": 1.0, "runs": runs}})
     assert texts["gait_runs"] == (
         "vanilla 7.50, 7.00 m/s (seeds 0, 1); 128 types 8.00 m/s (seed 0); "
         "16 types 0.40 m/s (seed 0)"
     )
     assert texts["gait_walks"] == "3 of the 4 runs walk (at least 1 m/s)"
-    assert set(prose.regime_gait(None).values()) == {prose.NOT_RUN}
+    assert set(regime_gait.regime_gait(None).values()) == {prose.NOT_RUN}

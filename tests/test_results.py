@@ -6,7 +6,7 @@ import shutil
 
 import pytest
 
-from sgb import claims, manifest, results, schemas
+from sgb import gather, manifest, results, schemas
 from sgb.paths import committed_results
 from sgb.supervised_sweep import figure2_records
 from sgb.validation import CorruptFile
@@ -51,21 +51,21 @@ def test_the_manifest_refuses_a_one_number_edit_of_a_committed_file(tmp_path):
     (tmp_path / "rl").mkdir()
     copy = tmp_path / "rl" / "fig5_ant_cpu.json"
     shutil.copy(committed_results() / "rl" / "fig5_ant_cpu.json", copy)
-    assert [r.key for r in claims.scorecard(tmp_path)][:2] == ["fig5.population_beats_mean"] * 2
+    assert [r.key for r in gather.scorecard(tmp_path)][:2] == ["fig5.population_beats_mean"] * 2
     payload = raw("rl/fig5_ant_cpu.json")
     first = payload["results"]["authors_protocol"]["individuals"][0][0]
     text = copy.read_text()
     assert text.count(repr(first)) == 1
     copy.write_text(text.replace(repr(first), "1e308"))
     with pytest.raises(CorruptFile, match="differs from its entry in") as error:
-        claims.scorecard(tmp_path)
+        gather.scorecard(tmp_path)
     assert error.value.path == copy
     assert "fig5_ant_cpu.json" in str(error.value) and "--maintainer-write-committed" in str(
         error.value
     )
     (tmp_path / manifest.NAME).unlink()  # a directory without a manifest: the schema refuses it
     with pytest.raises(CorruptFile, match=r"individuals\[0\]\[0\] = 1e\+308: Input should be less"):
-        claims.scorecard(tmp_path)
+        gather.scorecard(tmp_path)
 
 
 def test_provenance_line_names_profile_seeds_commits_date_and_wall_time():

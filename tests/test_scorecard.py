@@ -8,7 +8,8 @@ import re
 import numpy as np
 import pytest
 
-from sgb import claims, scorecard, stats, verdicts
+from sgb import claims, gather, scorecard, stats, verdicts
+from sgb.experiments import regime as regime_runs
 from sgb.paths import committed_results
 
 
@@ -19,7 +20,7 @@ def _row(key: str, verdict: str, estimate: float = 1.0, setting: str = "s") -> c
 
 
 def test_every_committed_row_lands_under_one_claim_and_the_counts_add_up():
-    rows = claims.scorecard(committed_results())
+    rows = gather.scorecard(committed_results())
     lines = scorecard.claim_lines(rows)
     assert sorted(id(r) for line in lines for r in line.rows) == sorted(id(r) for r in rows)
     assert sum(scorecard.counts(rows).values()) == len(rows)
@@ -93,15 +94,15 @@ def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_
         for s in range(3)
         for k, level in levels.items()
     ]
-    rows = claims.regime_rows({"runs": runs}, 50_000_000)
+    rows = regime_runs.regime_rows({"runs": runs}, 50_000_000)
     by_key = {r.key: r for r in rows}
     fall = by_key["fig3.fall_16.regime.ant"]
     # a fall of about 0.87 of vanilla, measured to within 0.2, is larger than the 0.3 stand-in
     assert fall.verdict == verdicts.LARGER and fall.test.low > 0.7
     assert "50M steps" in fall.budget
-    assert claims.regime_rows({"runs": [r for r in runs if r["seed"] == 0]}, 50_000_000) == []
+    assert regime_runs.regime_rows({"runs": [r for r in runs if r["seed"] == 0]}, 50_000_000) == []
     no_second_16 = [r for r in runs if r["seed"] == 0 or r["cell_types"] != 16]
-    (level,) = claims.regime_rows({"runs": no_second_16}, 50_000_000)
+    (level,) = regime_runs.regime_rows({"runs": no_second_16}, 50_000_000)
     assert level.key == "fig3.level_128.regime.ant" and "16 types 1" in level.budget
     two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
     (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
@@ -111,7 +112,7 @@ def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_
 def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
     """A row whose effect stands in for a direction says so in words beside the number; a
     row with the paper's own number says it is the paper's; the page shows both."""
-    rows = claims.scorecard(committed_results())
+    rows = gather.scorecard(committed_results())
     stand_in = next(r for r in rows if r.basis and r.paper_effect is not None)
     assert stand_in.compared.endswith(f"({stand_in.basis})")
     own = dataclasses.replace(stand_in, paper_effect=0.25, basis="")
@@ -124,7 +125,7 @@ def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
 def test_holm_corrects_within_each_figure_and_the_page_names_the_survivors():
     """Figure 3C and 3D are one family; each row's corrected p is Holm's over its family's
     p alone; the page counts the reproduced rows whose corrected p stays under 0.05."""
-    rows = claims.scorecard(committed_results())
+    rows = gather.scorecard(committed_results())
     adjusted = scorecard.holm_p(rows)
     figure3 = [i for i, r in enumerate(rows) if r.figure.startswith("Figure 3")]
     assert {rows[i].figure for i in figure3} >= {"Figure 3C", "Figure 3D"}
@@ -141,7 +142,7 @@ def test_a_verdict_below_the_papers_budget_says_how_far_below():
     """Figure 3 at 2M steps is at 4 % of the paper's 5 x 10^7 steps, and its line on the
     page says so under the badge; the authors' own 49,152,000 steps count as the paper's
     budget; a theorem has no budget of the paper's to fall short of."""
-    rows = claims.scorecard(committed_results())
+    rows = gather.scorecard(committed_results())
     fig3 = next(r for r in rows if r.key == "fig3.fall_16.ant")
     assert fig3.amount == 2_000_000 and fig3.share == pytest.approx(0.04)
     assert fig3.below_budget == "at 4 % of the paper's budget (steps)"

@@ -38,6 +38,9 @@ class Experiment:
     inputs: str = ""  # its datasets or environments, and the option that picks one
     costs: dict[str, str] = field(default_factory=dict)  # profile -> what a run costs
     shares_runs: bool = False  # its runs take locks, so several workers can share it
+    # part ("" for one file, else a body) -> the committed results file the book reads
+    results: dict[str, str] = field(default_factory=dict)
+    evidence_name: str = "evidence"  # its scorecard rows: evidence(records) -> list[Row]
 
     def _module(self):
         return importlib.import_module(f"sgb.experiments.{self.module}")
@@ -51,6 +54,17 @@ class Experiment:
     def profiles(self) -> dict[str, Any]:
         """Profile name -> the config ``run`` uses at that profile."""
         return getattr(self._module(), self.profiles_name)
+
+    @property
+    def evidence(self) -> Callable[..., list] | None:
+        """``evidence(records) -> list[claims.Row]``, its rows of the scorecard, or None."""
+        return getattr(self._module(), self.evidence_name, None)
+
+    @property
+    def texts(self) -> Callable[..., dict[str, str]] | None:
+        """``texts(records, card) -> dict[str, str]``, what its chapter glues (its module's,
+        shared by the experiments of one module), or None."""
+        return getattr(self._module(), "texts", None)
 
 
 # Costs: cpu wall times from the provenance of the committed results (results/*_cpu.json,
@@ -82,6 +96,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": f"34 s {_TWO_CORES}",
             "paper": "not measured (10,000 noise draws per gap, an 81 x 50 start grid)",
         },
+        results={"": "theory_cpu.json"},
     ),
     "fig2": Experiment(
         "fig2",
@@ -95,6 +110,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "fashion-mnist sweep) not measured at the present config; resumable",
             "paper": "not measured (50 epochs, 5 seeds; cifar10 200 epochs); needs a GPU",
         },
+        results={"": "fig2_fashion-mnist_cpu.json"},
     ),
     "dgb_budget": Experiment(
         "dgb_budget",
@@ -107,6 +123,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": f"51 min {_TWO_CORES}; resumable",
             "paper": "the cpu run (the same config)",
         },
+        results={"": "dgb_budget_fashion-mnist_cpu.json"},
     ),
     "dgb_full": Experiment(
         "dgb_full",
@@ -121,6 +138,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu run (the same config)",
         },
         shares_runs=True,
+        results={"": "dgb_full_fashion-mnist_cpu.json"},
     ),
     "sgb_full": Experiment(
         "sgb_full",
@@ -136,6 +154,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "105 cells (5 seeds), not measured",
         },
         shares_runs=True,
+        results={"": "sgb_full_fashion-mnist_cpu.json"},
     ),
     "fig3": Experiment(
         "fig3",
@@ -152,6 +171,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "55 runs of 50M steps per environment, not measured; needs a GPU",
         },
         shares_runs=True,
+        results={"ant": "rl/fig3_ant_cpu.json", "halfcheetah": "rl/fig3_halfcheetah_cpu.json"},
     ),
     "fig4": Experiment(
         "fig4_5",
@@ -166,6 +186,8 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": f"169 s {_TWO_CORES}",
             "paper": "not measured; needs fig3's paper checkpoint and a GPU",
         },
+        results={"": "rl/fig4_ant_cpu.json"},
+        evidence_name="fig4_evidence",
     ),
     "fig5": Experiment(
         "fig4_5",
@@ -179,6 +201,8 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": f"279 s {_TWO_CORES}",
             "paper": "not measured; needs fig3's paper checkpoint and a GPU",
         },
+        results={"": "rl/fig5_ant_cpu.json"},
+        evidence_name="fig5_evidence",
     ),
     "bet_hedging": Experiment(
         "bet_hedging",
@@ -195,6 +219,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "15 genomes of the spread sweep's paper checkpoints, 16 episodes; not "
             "measured",
         },
+        results={"": "rl/bet_hedging_ant_cpu.json"},
     ),
     "evolution": Experiment(
         "evolution",
@@ -207,6 +232,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": "20 cells of 2000 generations, about 17 min of one CPU core; resumable",
             "paper": "Fashion-MNIST, 64 hidden neurons, 10,000 generations; not measured",
         },
+        results={"": "evolution_digits_cpu.json"},
     ),
     "innate_start": Experiment(
         "innate_start",
@@ -225,6 +251,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "50 runs of 5 x 10^7 steps, not measured; needs fig3's paper checkpoints "
             "and a GPU",
         },
+        results={"": "rl/innate_start_ant_cpu.json"},
     ),
     "innate_start_supervised": Experiment(
         "innate_start_supervised",
@@ -238,6 +265,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "each training); resumable",
             "paper": "the cpu design on Fig. 2's paper SGB (50 epochs), 5 seeds; not measured",
         },
+        results={"": "innate_start_supervised_fashion-mnist_cpu.json"},
     ),
     "mean_gap": Experiment(
         "mean_gap",
@@ -251,6 +279,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": f"9 cells, 408 s {_TWO_CORES} (shared with other runs)",
             "paper": "the cpu cells at the paper's 50 epochs, not measured",
         },
+        results={"": "mean_gap_fashion-mnist_cpu.json"},
     ),
     "regime": Experiment(
         "regime",
@@ -266,6 +295,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu runs; not measured on a GPU",
         },
         shares_runs=True,
+        results={"": "rl/regime_ant_cpu.json"},
     ),
     "regime_peer": Experiment(
         "regime_peer",
@@ -280,6 +310,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu runs",
         },
         shares_runs=True,
+        results={"": "rl/regime_peer_ant_cpu.json"},
     ),
     "regime_gait": Experiment(
         "regime_gait",
@@ -293,6 +324,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": "256 x 1000 env-steps per finished regime run, not yet measured; resumable",
             "paper": "the cpu runs; not measured on a GPU",
         },
+        results={"": "rl/regime_gait_ant_cpu.json"},
     ),
     "populations": Experiment(
         "populations",
@@ -306,6 +338,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": "57.6M env-steps, about an hour of one CPU core; resumable",
             "paper": "not measured; needs fig3's paper checkpoints and a GPU",
         },
+        results={"": "rl/populations_ant_cpu.json"},
     ),
     "regime_populations": Experiment(
         "populations",
@@ -323,6 +356,8 @@ EXPERIMENTS: dict[str, Experiment] = {
             "cpu": "32M env-steps, about half an hour of one CPU core (not yet run); resumable",
             "paper": "the cpu design on the paper's checkpoint; not measured",
         },
+        results={"": "rl/regime_populations_ant_cpu.json"},
+        evidence_name="regime_evidence",
     ),
     "spread": Experiment(
         "rl_spread",
@@ -335,8 +370,14 @@ EXPERIMENTS: dict[str, Experiment] = {
             f"42 min {_TWO_CORES}; resumable",
             "paper": "15 runs of 50M steps, not measured; needs a GPU",
         },
+        results={"": "rl/spread_ant_cpu.json"},
     ),
 }
+
+
+def results_files() -> dict[str, dict[str, str]]:
+    """Experiment -> part -> the committed results file the book reads of it."""
+    return {name: e.results for name, e in EXPERIMENTS.items() if e.results}
 
 
 def get_experiment(name: str) -> Experiment:

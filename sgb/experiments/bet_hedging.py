@@ -30,11 +30,14 @@ from typing import Any
 
 import numpy as np
 
-from sgb import hedging, validation
+from sgb import claims, hedging, stats, validation
+from sgb.claims import CLAIMS, Row, judge, untestable
 from sgb.genome import mean_sigma
 from sgb.profiles import PROFILE_NAMES, check_profile
+from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
+from sgb.results import Payload, Records
 from sgb.rl.envs import VARIANTS
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
@@ -173,3 +176,99 @@ def hedging_config(profile: str) -> HedgingConfig:
 
 
 PROFILES = {p: hedging_config(p) for p in PROFILE_NAMES}
+
+
+HEDGING_Q = "0.5"  # survival: a return of half the mean network's on the normal body
+
+
+HEDGING_K = "10"  # at least 10 of the 100 members
+
+
+def bet_hedging_rows(results: dict) -> list[Row]:
+    """Bet-hedging (``sgb.experiments.bet_hedging``): per initial spread, the genomes'
+    individuals against clones of their mean networks on the four conditions, by
+    geometric-mean fitness and by the chance that at least ``HEDGING_K`` of them survive
+    (a return of ``HEDGING_Q`` of the mean network's on the normal body); a one-sample t
+    over the genomes of their differences."""
+    rows = []
+    for rho in dict.fromkeys(g["rho_init"] for g in results["genomes"]):
+        genomes = [g for g in results["genomes"] if g["rho_init"] == rho]
+        if len(genomes) < 2:
+            continue
+        scores = [g["scores"] for g in genomes]
+        sigma = np.mean([g["sigma_trained"] for g in genomes])
+        setting = f"rho from {rho:g} (trained sigma {sigma:.2g})"
+        n, e = np.shape(genomes[0]["returns"]["individuals"]["normal"])
+        budget = f"{len(genomes)} genomes, {n} members x {e} episodes x 4 conditions"
+        geometric = [
+            s["individuals"]["geometric_fitness"] - s["clones"]["geometric_fitness"] for s in scores
+        ]
+        rows.append(_across_genomes("ch6.hedging_geometric", setting, geometric, budget))
+        survival = [
+            s["individuals"]["p_at_least"][HEDGING_Q][HEDGING_K]
+            - s["clones"]["p_at_least"][HEDGING_Q][HEDGING_K]
+            for s in scores
+        ]
+        rows.append(_across_genomes("ch6.hedging_survival", setting, survival, budget))
+    return rows
+
+
+def _across_genomes(key: str, setting: str, differences, budget: str) -> Row:
+    """A one-sample t over the genomes of individuals - clones; not testable where every
+    genome gives the same difference (for a survival chance: both populations always, or
+    never, had enough survivors)."""
+    if np.ptp(differences) == 0:
+        reason = f"every genome gives the same difference, {differences[0]:+.2f}: no spread to test"
+        claim = CLAIMS[key]
+        return replace(
+            untestable(key, reason),
+            setting=setting,
+            paper_effect=claim.paper_effect,
+            basis=claim.basis,
+            budget=budget,
+        )
+    return judge(key, setting, stats.one_sample(differences, 0.0), budget)
+
+
+def bet_hedging(payload: Payload | None) -> dict[str, str]:
+    """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``) and, per
+    initial spread j (0 the narrowest: rho from -5, -3, -1.5), its trained sigma
+    (``hedge{j}_sigma``), both populations' mean return over conditions, members and
+    genomes (``hedge{j}_returns``) and the rows of ``bet_hedging_rows``:
+    geometric-mean fitness (``hedge{j}_geometric_*``) and survival
+    (``hedge{j}_survival_*``); ``NOT_RUN`` for all without the file."""
+    texts = {"hedge_design": NOT_RUN}
+    for j in range(3):
+        texts[f"hedge{j}_sigma"] = texts[f"hedge{j}_returns"] = NOT_RUN
+        texts |= row_texts(f"hedge{j}_geometric", None) | row_texts(f"hedge{j}_survival", None)
+    if payload is None:
+        return texts
+    genomes = payload["results"]["genomes"]
+    card = claims.by_key(bet_hedging_rows(payload["results"]))
+    for j, rho in enumerate(dict.fromkeys(g["rho_init"] for g in genomes)):
+        group = [g for g in genomes if g["rho_init"] == rho]
+        texts[f"hedge{j}_sigma"] = f"{np.mean([g['sigma_trained'] for g in group]):.2g}"
+        mean_return = {
+            p: np.mean([np.mean(list(g["returns"][p].values())) for g in group])
+            for p in ("individuals", "clones")
+        }
+        texts[f"hedge{j}_returns"] = (
+            f"{mean_return['individuals']:.0f} for the individuals, "
+            f"{mean_return['clones']:.0f} for the clones"
+        )
+        for kind in ("geometric", "survival"):
+            row = row_of(card, f"ch6.hedging_{kind}", f"rho from {rho:g} ")
+            texts |= row_texts(f"hedge{j}_{kind}", row)
+            texts["hedge_design"] = NOT_RUN if row is None else row.budget
+    return texts
+
+
+def evidence(records: Records) -> list[Row]:
+    """Individuals against clones of the mean network (``bet_hedging_rows``)."""
+    payload = records.get("bet_hedging")
+    return [] if payload is None else bet_hedging_rows(payload["results"])
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 6 glues of bet-hedging (``bet_hedging``)."""
+    return bet_hedging(records.get("bet_hedging"))

@@ -24,8 +24,10 @@ from sgb.budget import BudgetConfig, sizes_and_width, train_with_budget
 from sgb.compression import CONVENTIONS, compression
 from sgb.data import Dataset, load
 from sgb.dgb import DGBConfig
+from sgb.prose import Card, percent
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
+from sgb.results import Records
 from sgb.supervised import DenseConfig, train_and_evaluate
 
 PROFILES: dict[str, BudgetConfig] = {
@@ -110,3 +112,29 @@ def _write(recording: Recording, results: dict) -> Path:
     dense = results.get("uncompressed_same_budget")
     parts = results["records"] + ([dense] if dense else [])
     return recording.write(results, [recording.config.dgb.seed], parts=parts)
+
+
+def dgb_budget(results: dict, dense_accuracy: float) -> dict[str, str]:
+    """The DGB budget run (``dgb_budget_fashion-mnist_cpu.json``'s results): test accuracy
+    after 25, 100, 250 and 500 rounds (``budget_25``, ...), the first round within 3 points
+    of ``dense_accuracy`` (a fraction; ``budget_near_rounds``), the best validation at 500
+    (``budget_val_500``) and the uncompressed network at the same budget (``budget_same``,
+    ``budget_same_epochs``)."""
+    records = results["records"]
+    at = {r["rounds"]: r for r in records}
+    near = next(r for r in records if r["test_accuracy"] >= dense_accuracy - 0.03)
+    same = results["uncompressed_same_budget"]
+    texts = {f"budget_{n}": percent(at[n]["test_accuracy"]) for n in (25, 100, 250, 500)}
+    return texts | {
+        "budget_near_rounds": str(near["rounds"]),
+        "budget_val_500": percent(at[500]["best_validation_accuracy"]),
+        "budget_same": percent(same["accuracy"]),
+        "budget_same_epochs": str(same["epochs"]),
+    }
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 4 glues of the DGB at the authors' budget (``dgb_budget``), beside the
+    uncompressed network of Figure 2's cpu sweep."""
+    dense = records("fig2")["results"]["ours"]["summary"]["dense"]["mean"][0]
+    return dgb_budget(records("dgb_budget")["results"], dense)

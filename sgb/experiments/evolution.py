@@ -17,17 +17,23 @@ provenance; a rerun with the same config skips the cells already there.
 """
 
 import dataclasses
+import math
 import time
 from pathlib import Path
 from typing import Any
 
-from sgb import validation
+import numpy as np
+
+from sgb import claims, stats, validation
 from sgb.cells import train_cells
+from sgb.claims import Row, judge
 from sgb.compression import compression
 from sgb.data import DATASETS, load
 from sgb.evolution import EvolutionConfig, evolve
+from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
+from sgb.results import Payload, Records
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,3 +131,86 @@ PROFILES: dict[str, EvolutionSweep] = {
         seeds=(0, 1, 2, 3, 4),
     ),
 }
+
+
+def evolution_rows(results: dict) -> list[Row]:
+    """Evolution without gradients (``sgb.experiments.evolution``): per number of hidden
+    types, the stochastic genome's individuals (their mean test accuracy) against the
+    deterministic genome's network, paired by seed (both start from the same means)."""
+    records = results["records"]
+    rows = []
+    for k in sorted({r["hidden_types"] for r in records}):
+        by_seed = {
+            stochastic: {
+                r["seed"]: r
+                for r in records
+                if r["hidden_types"] == k and r["stochastic"] is stochastic
+            }
+            for stochastic in (True, False)
+        }
+        seeds = sorted(set(by_seed[True]) & set(by_seed[False]))
+        if len(seeds) < 2:
+            continue
+        stochastic = [100 * np.mean(by_seed[True][s]["individuals"]) for s in seeds]
+        deterministic = [100 * by_seed[False][s]["mean_network"] for s in seeds]
+        first = by_seed[True][seeds[0]]
+        rows.append(
+            judge(
+                "ch6.evolution_stochastic_helps",
+                f"{results['dataset']}, {k} hidden types ({first['compression']:.0f}x)",
+                stats.paired(stochastic, deterministic),
+                f"{len(first['mean_fitness'])} generations, {len(seeds)} seeds",
+            )
+        )
+    return rows
+
+
+def evolution(payload: Payload | None) -> dict[str, str]:
+    """Evolution without gradients (``evolution_digits_cpu.json``): the design
+    (``evo_design``), per number of hidden types k the two genomes' test accuracies
+    (``evo_k{k}_stochastic``, ``evo_k{k}_deterministic``: mean +- SEM over seeds, %), the
+    evolved spreads (``evo_sigma``) and the rows of ``evolution_rows``
+    (``evo_k{k}_*``); ``NOT_RUN`` for all without the file. Names for k = 2 and 8."""
+    texts = {"evo_design": NOT_RUN, "evo_sigma": NOT_RUN}
+    for k in (2, 8):
+        texts |= {f"evo_k{k}_{g}": NOT_RUN for g in ("stochastic", "deterministic")}
+        texts |= row_texts(f"evo_k{k}", None)
+    if payload is None:
+        return texts
+    records = payload["results"]["records"]
+    candidates = payload["provenance"]["config"]["base"]["candidates"]
+    texts["evo_design"] = (
+        f"{len(records[0]['mean_fitness'])} generations of {candidates} candidate genomes, "
+        f"{len({r['seed'] for r in records})} seeds"
+    )
+    sigma = [r["sigma_mean"] for r in records if r["stochastic"]]
+    texts["evo_sigma"] = f"{min(sigma):.2f} to {max(sigma):.2f}"
+    for k in (2, 8):
+        for stochastic, name in ((True, "stochastic"), (False, "deterministic")):
+            values = np.array(
+                [
+                    100 * np.mean(r["individuals"])
+                    for r in records
+                    if r["hidden_types"] == k and r["stochastic"] is stochastic
+                ]
+            )
+            if values.size > 1:
+                sem = values.std(ddof=1) / math.sqrt(values.size)
+                texts[f"evo_k{k}_{name}"] = f"{values.mean():.1f} ± {sem:.1f} %"
+    card = claims.by_key(evolution_rows(payload["results"]))
+    for k in (2, 8):
+        texts |= row_texts(
+            f"evo_k{k}", row_of(card, "ch6.evolution_stochastic_helps", f" {k} hidden")
+        )
+    return texts
+
+
+def evidence(records: Records) -> list[Row]:
+    """The stochastic genome against the deterministic one (``evolution_rows``)."""
+    payload = records.get("evolution")
+    return [] if payload is None else evolution_rows(payload["results"])
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 6 glues of evolution (``evolution``)."""
+    return evolution(records("evolution"))

@@ -23,14 +23,22 @@ type pair is the main setting and per synapse the ablation.
 
 from pathlib import Path
 
+import pandas as pd
+
+from sgb import stats
 from sgb.cells import train_cells
+from sgb.claims import COUNTS, Row, accuracies, crossover_row, judge, nearest_pairs, welch_table
 from sgb.classifiers import dense_sizes
 from sgb.data import load
+from sgb.prose import Card, percent, row_of, row_texts
 from sgb.recording import Recording, start
+from sgb.results import Records
 from sgb.supervised_sweep import SWEEPS, run_one, sweep_cells, sweep_summary
 
 # the registry reads an experiment's profiles here: profile -> dataset -> sweep and ablation
 PROFILES = SWEEPS
+_CPU = SWEEPS["cpu"]["fashion-mnist"]["sweep"]  # the sweep the book's rows come from
+CPU_EPOCHS, CPU_ROUNDS = _CPU.sgb.epochs, _CPU.dgb.rounds
 
 
 def run(
@@ -86,3 +94,122 @@ def _write(
     results = {"dataset": dataset, "sizes": list(sizes), **done, **sweep_summary(records)}
     seeds = recording.config["sweep"].seeds
     return recording.write(results, seeds, parts=records + done["ablation_records"])
+
+
+def figure2_rows(results: dict, dataset: str) -> list[Row]:
+    """Figure 2's four statements on ``dataset`` (accuracies in percentage points)."""
+    sgb = accuracies(results["records"], "sgb")
+    dgb = accuracies(results["records"], "dgb")
+    low = [min(sgb), min(dgb)]
+    ratios_s, ratios_d = sorted(sgb), sorted(dgb)
+    seeds = len(sgb[ratios_s[0]])
+    budget = f"{seeds} seeds; the cpu sweep (SGB {CPU_EPOCHS} epochs, DGB {CPU_ROUNDS} rounds)"
+    setting = f"{dataset}, our DGB layout"
+    rows = [
+        judge(
+            "fig2.dgb_better_low",
+            f"{setting}, about {min(low):.0f}x",
+            stats.welch(100 * dgb[ratios_d[0]], 100 * sgb[ratios_s[0]]),
+            budget,
+            amount=CPU_EPOCHS,
+        )
+    ]
+    for i in (-2, -1):
+        rows.append(
+            judge(
+                "fig2.sgb_better_high",
+                f"{setting}, about {ratios_s[i]:.0f}x",
+                stats.welch(100 * sgb[ratios_s[i]], 100 * dgb[ratios_d[i]]),
+                budget,
+                amount=CPU_EPOCHS,
+            )
+        )
+    # slow decline: each model's loss from the lowest ratio to the second-highest
+    decline_s = 100 * (sgb[ratios_s[0]].mean() - sgb[ratios_s[-2]])
+    decline_d = 100 * (dgb[ratios_d[0]].mean() - dgb[ratios_d[-2]])
+    rows.append(
+        judge(
+            "fig2.sgb_declines_slowly",
+            f"{setting}, {ratios_s[0]:.0f}x to {ratios_s[-2]:.0f}x",
+            stats.welch(decline_d, decline_s),
+            budget,
+            amount=CPU_EPOCHS,
+        )
+    )
+    return rows
+
+
+def figure2_ratio_tests(results: dict) -> pd.DataFrame:
+    """SGB minus DGB (``welch_table``) at every ratio the DGB ran, against the SGB at the
+    nearest ratio."""
+    sgb = accuracies(results["records"], "sgb")
+    dgb = accuracies(results["records"], "dgb")
+    return welch_table(sgb, dgb, nearest_pairs(sgb, dgb), ("SGB", "DGB"))
+
+
+def figure2_crossover(rows: list[Row], results: dict, dataset: str) -> list[Row]:
+    """``crossover_row`` of Figure 2's cpu sweep (its ``results``) on ``dataset``, under
+    each count of compression (``COUNTS``); its budget that of the sweep's ``rows``."""
+    records = results["records"]
+    return [
+        crossover_row(
+            accuracies(records, "sgb", count=count),
+            accuracies(records, "dgb", count=count),
+            f"{dataset}, our DGB layout, {words}",
+            "fig2.crossover",
+            rows[0].budget,
+            rows[0].amount,
+        )
+        for count, words in COUNTS.items()
+    ]
+
+
+def figure2(results: dict, card: Card) -> dict[str, str]:
+    """Figure 2 on Fashion-MNIST (``fig2_fashion-mnist_cpu.json``'s results): the
+    scorecard rows (``f2_low``, ``f2_high400``, ``f2_high700``, ``f2_slow``, ``f2_cross`` and
+    ``f2_cross_theirs``, the crossover under our count and the authors'),
+    accuracies (``f2_dense``, ``f2_dgb_10x``, ``f2_dgb_best``, ``f2_sgb_10x``), the mean
+    network's range (``f2_meannet_range``) and the crossovers of each count
+    (``f2_crossing_{ours,authors}``)."""
+    high = card.get("fig2.sgb_better_high", [])
+    rows = {
+        "f2_low": row_of(card, "fig2.dgb_better_low"),
+        "f2_high400": high[0] if high else None,
+        "f2_high700": high[1] if len(high) > 1 else None,
+        "f2_slow": row_of(card, "fig2.sgb_declines_slowly"),
+        "f2_cross": row_of(card, "fig2.crossover", "our count"),
+        "f2_cross_theirs": row_of(card, "fig2.crossover", "the authors' count"),
+    }
+    texts = {}
+    for name, row in rows.items():
+        texts |= row_texts(name, row)
+    summary = results["ours"]["summary"]
+    means = results["ours"]["summary_mean_network"]["sgb"]["mean"]
+    texts |= {
+        "f2_dense": percent(summary["dense"]["mean"][0]),
+        "f2_dgb_10x": percent(summary["dgb"]["mean"][0]),
+        "f2_dgb_best": percent(max(summary["dgb"]["mean"])),
+        "f2_sgb_10x": percent(summary["sgb"]["mean"][0]),
+        "f2_meannet_range": f"{100 * min(means[:-1]):.0f}-{100 * max(means):.0f} %",
+    }
+    for convention in ("ours", "authors"):
+        crossings = results[convention]["crossovers"]
+        texts[f"f2_crossing_{convention}"] = ", ".join(f"{c:.0f}x" for c in crossings) or "none"
+    return texts
+
+
+BOOK_DATASET = "Fashion-MNIST"  # the dataset of the committed sweep the book reads
+
+
+def evidence(records: Records) -> list[Row]:
+    """Figure 2's statements and its crossover under both counts, from the cpu sweep."""
+    payload = records.get("fig2")
+    if payload is None:
+        return []
+    rows = figure2_rows(payload["results"], BOOK_DATASET)
+    return rows + figure2_crossover(rows, payload["results"], BOOK_DATASET)
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 4 glues of the cpu sweep (``figure2``)."""
+    return figure2(records("fig2")["results"], card)

@@ -11,12 +11,16 @@ from pathlib import Path
 
 import numpy as np
 
+from sgb import stats, verdicts
+from sgb.claims import CLAIMS, Row, figure3_rows, judge, run_returns, trained_steps
 from sgb.profiles import PROFILE_NAMES
+from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import read_results
 from sgb.recording import Recording, start
+from sgb.results import Payload, Records
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
-from sgb.rl.regimes import with_settings
+from sgb.rl.regimes import authors_scale, with_settings
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, finished_run, seed_sem, train_runs
 from sgb.rl.sweep import BACKENDS, CellTypeSweep, sweep_config
 
@@ -120,3 +124,119 @@ def best_checkpoint(results_dir: Path, env: str = "ant") -> Path:
 
 
 FIG3_PROFILES = {p: {env: sweep_config(env, p) for env in BACKENDS} for p in PROFILE_NAMES}
+
+
+def typing_rows(results: dict, steps: int, score: str = "last_two_return") -> list[Row]:
+    """Chapter 5's explanation of the fall at 16 types under the authors' genome: typing
+    the observation entries. Each ablation swaps the input typing alone."""
+    runs = results["runs"]
+    vanilla = run_returns(runs, "ours", None, score).mean()
+    pairs = [
+        ("authors_untyped_inputs", "authors", "the authors' genome, inputs untyped vs typed"),
+        ("ours", "ours_typed_inputs", "our genome, inputs untyped vs typed"),
+    ]
+    rows = []
+    for untyped, typed, label in pairs:
+        a, b = run_returns(runs, untyped, 16, score), run_returns(runs, typed, 16, score)
+        if min(a.size, b.size) < 2:
+            continue
+        rows.append(
+            judge(
+                "ch5.typing_explains_fall",
+                label,
+                stats.welch(a / vanilla, b / vanilla),
+                f"{steps / 1e6:g}M steps, seeds {a.size} and {b.size}",
+            )
+        )
+    return rows
+
+
+def untrained_row(env: str, steps: int) -> Row:
+    """Figure 3 on a body whose vanilla agent learned nothing in ``steps``: no fraction of
+    vanilla means anything there."""
+    return Row(
+        CLAIMS[f"fig3.fall_16.{env}"],
+        f"{env}, {steps:,} steps",
+        None,
+        "",
+        None,
+        f"{steps:,} steps: vanilla PPO learned nothing",
+        verdicts.INCONCLUSIVE,
+        "a sweep in which vanilla PPO learns: 2M steps on spring (the cpu profile)",
+        steps,
+    )
+
+
+def _trained(results: dict) -> bool:
+    """Whether a Figure 3 sweep learned anything: vanilla's mean return above what an
+    agent earns standing still or in place (1000 steps x the healthy reward 1 for the
+    Ant; 0 for the HalfCheetah)."""
+    vanilla = [r["final_return"] for r in results["runs"] if r["cell_types"] is None]
+    return len(vanilla) >= 2 and np.mean(vanilla) > (1000 if results["env"] == "ant" else 100)
+
+
+def figure3(ant: Payload, cheetah: Payload, card: Card) -> dict[str, str]:
+    """Figure 3 on both bodies: the sweeps' vanilla numbers (``ant_*``, ``hc_*``), the level
+    and fall rows (``level_*``, ``fall_*``, ``cheetah_level_*``, ``cheetah_fall_*``) and the
+    typing ablation (``typing_{authors,ours}_*``; "not yet run (fewer than 2 seeds)")."""
+    texts = _vanilla("ant", ant) | _vanilla("hc", cheetah)
+    texts |= _level_and_fall("", "ant", card) | _level_and_fall("cheetah_", "halfcheetah", card)
+    typing = {r.setting.split(",")[0]: r for r in card.get("ch5.typing_explains_fall", [])}
+    for who, settings in GENOMES:
+        missing = f"{NOT_RUN} (fewer than 2 seeds)"
+        texts |= row_texts(f"typing_{settings}", typing.get(who), missing)
+    return texts
+
+
+def _vanilla(prefix: str, payload: Payload) -> dict[str, str]:
+    """A Figure 3 sweep's steps per run (``{prefix}_steps``, millions), vanilla PPO's mean
+    last-two return over its seeds (``_vanilla``), their number (``_vanilla_n``) and that
+    mean on the authors' scale (``_vanilla_theirs``)."""
+    results = payload["results"]
+    vanilla = [r for r in results["runs"] if r["cell_types"] is None]
+    steps = payload["provenance"]["config"]["ppo"]["total_steps"]
+    mean = float(np.mean([r["last_two_return"] for r in vanilla]))
+    return {
+        f"{prefix}_steps": f"{steps / 1e6:g}M",
+        f"{prefix}_vanilla": f"{mean:.0f}",
+        f"{prefix}_vanilla_n": str(len(vanilla)),
+        f"{prefix}_vanilla_theirs": f"{authors_scale(results['env'], mean):.2f}",
+    }
+
+
+def _level_and_fall(prefix: str, env: str, card: Card) -> dict[str, str]:
+    """Figure 3's level at 128 types and fall to 16 types on ``env``, per genome settings
+    (``{prefix}level_ours_*``, ...), each with ``_power``: the power to detect 0.3."""
+    texts = {}
+    for who, settings in GENOMES:
+        for what in ("level", "fall"):
+            key = f"fig3.level_128.{env}" if what == "level" else f"fig3.fall_16.{env}"
+            row = row_of(card, key, who)
+            name = f"{prefix}{what}_{settings}"
+            texts |= row_texts(name, row)
+            power = None if row is None or row.test is None else stats.power_at(row.test, 0.3)
+            texts[f"{name}_power"] = NOT_RUN if power is None else f"{power:.0%}"
+    return texts
+
+
+def evidence(records: Records) -> list[Row]:
+    """Figure 3's rows on each body (the typing ablation on the Ant's), or the row that
+    says the sweep learned nothing."""
+    rows = []
+    for env in ("ant", "halfcheetah"):
+        payload = records.get("fig3", env)
+        if payload is None:
+            continue
+        steps = trained_steps(payload)
+        if not _trained(payload["results"]):
+            rows.append(untrained_row(env, steps))
+            continue
+        rows += figure3_rows(payload["results"], env, steps)
+        if env == "ant":
+            rows += typing_rows(payload["results"], steps)
+    return rows
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 5 glues of Figure 3's sweeps (``figure3``)."""
+    return figure3(records("fig3", "ant"), records("fig3", "halfcheetah"), card)

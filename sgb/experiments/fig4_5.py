@@ -7,11 +7,19 @@
   initial states; paired t-test.
 """
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
+
+from sgb import stats, verdicts
+from sgb.claims import Row, episodes_to_decide, genomes_at, judge, legs_row, trained_steps
 from sgb.profiles import PROFILE_NAMES
+from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.recording import start
+from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.results import Records
 from sgb.rl.protocols import (
     PopulationConfig,
     authors_protocol,
@@ -72,3 +80,120 @@ def run_fig4(profile: str, out_dir: Path, env: str = "ant") -> Path:
 def run_fig5(profile: str, out_dir: Path, env: str = "ant") -> Path:
     """Figure 5: individuals against the mean network."""
     return _run_population(profile, out_dir, env, "fig5")
+
+
+def figure4_rows(returns: dict) -> list[Row]:
+    """Figure 4E: r between the normal and the long-legged body. The paper's r is compared
+    as this measurement would see it: attenuated by the reliability of each body's
+    k-episode means (an r of rho between true abilities is observed as about
+    rho * sqrt(rel_x rel_y)). Where the individuals cannot be told apart at all (a
+    reliability of 0 or below), the budget that decides is in episodes, from the upper
+    end of the intraclass correlation's interval."""
+    x = np.asarray(returns["normal"]["individuals"])
+    y = np.asarray(returns["long_legs"]["individuals"])
+    splits = [variance_split(v) for v in (x, y)]
+    rel = [max(s.reliability, 0.0) for s in splits]
+    attenuation = math.sqrt(rel[0] * rel[1])
+    test = stats.fisher_r(x.mean(axis=1), y.mean(axis=1))
+    setting = (
+        f"ant, 64 types, {x.shape[1]} episodes each (reliabilities "
+        f"{splits[0].reliability:.2f}, {splits[1].reliability:.2f})"
+    )
+    budget = f"{x.shape[0]} individuals x {x.shape[1]} episodes"
+    if attenuation > 0:
+        return [legs_row(setting, test, attenuation, budget, "")]
+    icc_high = min(s.icc_ci[1] for s in splits)
+    episodes = math.ceil(episodes_for(icc_high))
+    bound = max(between_sd_bound(s) for s in splits)
+    decide = (
+        f"individuals that differ: at least {episodes} episodes each (ICC's upper 95 % bound "
+        f"{icc_high:.3f}); the SD between individuals is below {bound:.0f}"
+    )
+    return [legs_row(setting, test, attenuation, budget, decide)]
+
+
+def figure5_rows(fig5: dict) -> list[Row]:
+    """Figure 5: the population's mean return against its mean network's, our paired
+    protocol and the authors' (individuals against the mean network's own sample, Welch).
+    The paper's effect: about 1 % of the return (what its plot data imply)."""
+    returns = fig5["returns"]["normal"]
+    ind, mean_net = np.asarray(returns["individuals"]), np.asarray(returns["mean_network"])
+    paired = stats.paired(ind.mean(axis=1), mean_net.mean(axis=1))
+    effect = 0.01 * float(mean_net.mean())
+    ours = judge(
+        "fig5.population_beats_mean",
+        f"ant, 64 types, ours: paired, {ind.shape[1]} episodes on shared initial states",
+        paired,
+        f"{ind.shape[0]} individuals x {ind.shape[1]} episodes",
+        paper_effect=effect,
+        basis=f"about 1 % of the return ({effect:.0f}), as the authors' plot data imply",
+    )
+    if ours.verdict == verdicts.INCONCLUSIVE:
+        ours = replace(ours, decide=episodes_to_decide(ind - mean_net, effect))
+    authors = fig5["authors_protocol"]
+    a_all = np.asarray(authors["individuals"])
+    a_mean = np.asarray(authors["mean_network"])
+    a_effect = 0.01 * float(a_mean.mean())
+    theirs = judge(
+        "fig5.population_beats_mean",
+        f"ant, 64 types, the authors' protocol: sampled actions, {a_all.shape[1]} episodes "
+        f"each, mean network {a_mean.size} (Welch; their one-sample t = {authors['t']:.2f})",
+        stats.welch(a_all.mean(axis=1), a_mean),
+        f"{a_all.shape[0]} individuals x {a_all.shape[1]} episodes, "
+        f"{a_mean.size} mean-network episodes",
+        paper_effect=a_effect,
+        basis=f"about 1 % of the return ({a_effect:.0f})",
+    )
+    if theirs.verdict == verdicts.INCONCLUSIVE:
+        theirs = replace(theirs, decide=episodes_to_decide(a_all, a_effect))
+    return [ours, theirs]
+
+
+def figures4_5(card: Card) -> dict[str, str]:
+    """Figure 4E's correlation between bodies (``legs_*``) and Figure 5's individuals
+    against the mean network under our protocol and the authors' (``fig5_ours_*``,
+    ``fig5_theirs_*``): the first rows of each claim, those of the one genome."""
+    fig5 = card.get("fig5.population_beats_mean", []) + [None, None]
+    texts = row_texts("legs", row_of(card, "fig4e.r_legs"))
+    return texts | row_texts("fig5_ours", fig5[0]) | row_texts("fig5_theirs", fig5[1])
+
+
+def variability(card: Card) -> dict[str, str]:
+    """The title's claim (``title.variability*`` rows): the genome of the authors' regime
+    (``variability_regime``: estimate, interval and verdict) and, per genome settings at
+    the cpu sweep's budget, each genome's verdict (``variability_ours``,
+    ``variability_authors``); ``NOT_RUN`` where a setting has no row."""
+    texts = {}
+    regime = row_of(card, "title.variability.regime")
+    found = row_texts("row", regime)
+    shown = f"{found['row_ours']} % of the return, {found['row_verdict']}"
+    texts["variability_regime"] = NOT_RUN if regime is None else shown
+    for who, settings in GENOMES:
+        rows = [r for r in card.get("title.variability", []) if f", {who}, " in r.setting]
+        texts[f"variability_{settings}"] = (
+            "; ".join(f"{r.setting.split(', ')[-1]}: {r.ours} %, **{r.verdict}**" for r in rows)
+            or NOT_RUN
+        )
+    return texts
+
+
+def fig4_evidence(records: Records) -> list[Row]:
+    """Figure 4's rows, their budget the steps Figure 3's genome trained."""
+    payload = records.get("fig4")
+    if payload is None:
+        return []
+    steps = trained_steps(records.get("fig3", "ant"))
+    return genomes_at(figure4_rows(payload["results"]["returns"]), steps)
+
+
+def fig5_evidence(records: Records) -> list[Row]:
+    """Figure 5's rows, their budget the steps Figure 3's genome trained."""
+    payload = records.get("fig5")
+    if payload is None:
+        return []
+    return genomes_at(figure5_rows(payload["results"]), trained_steps(records.get("fig3", "ant")))
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 5 glues of Figures 4 and 5 and of the title's variability."""
+    return figures4_5(card) | variability(card)

@@ -59,16 +59,20 @@ episodes, 4.8M steps, 4 minutes; compiling about 4 minutes: about 2.8 CPU hours 
 the 2M steps the genomes were trained for).
 """
 
+import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
-from sgb import validation
+from sgb import stats, validation
+from sgb.claims import Row, judge
 from sgb.profiles import PROFILE_NAMES, check_profile
+from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
+from sgb.results import Payload, Records
 from sgb.rl.agent import NetworkConfig, Params
 from sgb.rl.finetune import individual_key, plain_actor, plain_network
 from sgb.rl.normalizer import Normalizer, init_normalizer
@@ -370,3 +374,90 @@ def _write(recording: Recording, genomes: _Genomes, runs: list[dict]) -> Path:
         "summary": summarise(runs),
     }
     return recording.write(results, config.seeds, parts=selections + runs)
+
+
+def innate_start_rows(results: dict) -> list[Row]:
+    """Innate start, then learning on the long-legged Ant (``sgb.experiments.
+    innate_start``): per genome and start (mean network, best of 100, random individual),
+    the area under its learning curve over the fresh network's of the same seed, less 1;
+    a one-sample t over the seeds."""
+    runs = results["runs"]
+    fresh = {r["seed"]: r["auc"] for r in runs if r["start"] == "fresh"}
+    pool = {len(s["individual_means"]) for s in results["selections"]}
+    starts = {
+        "mean": "its mean network",
+        "best": f"the best of {'/'.join(map(str, sorted(pool)))} individuals",
+        "random": "a random individual",
+    }
+    rows = []
+    for genome, begin in dict.fromkeys((r["genome"], r["start"]) for r in runs):
+        group = [r for r in runs if (r["genome"], r["start"]) == (genome, begin)]
+        gains = [r["auc"] / fresh[r["seed"]] - 1 for r in group if r["seed"] in fresh]
+        if begin == "fresh" or len(gains) < 2:
+            continue
+        rows.append(
+            judge(
+                "ch6.innate_start_rl",
+                f"{genome}, from {starts[begin]}",
+                stats.one_sample(gains, 0.0),
+                f"{len(gains)} seeds of {group[0]['eval_steps'][-1] / 1e6:.1f}M steps",
+            )
+        )
+    return rows
+
+
+def innate_start(ant: Payload | None, supervised: Payload | None, card: Card) -> dict[str, str]:
+    """Innate start, then learning: what of it is committed (``innate_status``); on the
+    Ant, each genome's and start's gain in learning-curve area over the fresh network
+    (``innate_rl_rows``: estimate, interval and verdict of ``innate_start_rows``);
+    the supervised twin's rows of ``card`` (``innate_sup_{individual,mean}_{area,end}_*``:
+    over the epoch and after it)."""
+    parts = []
+    texts = {"innate_rl_rows": NOT_RUN}
+    if ant is None:
+        parts.append(f"the Ant runs {NOT_RUN}")
+    else:
+        runs = ant["results"]["runs"]
+        state = "complete" if ant["results"]["complete"] else "in progress"
+        parts.append(f"{len(runs)} Ant fine-tuning runs committed ({state})")
+        rows = innate_start_rows(ant["results"])
+        if rows:
+            texts["innate_rl_rows"] = "; ".join(
+                f"{r.setting}: {r.ours}, **{r.verdict}**" for r in rows
+            )
+    if supervised is None:
+        parts.append(f"the supervised twin {NOT_RUN}")
+    else:
+        summary = supervised["results"]["summary"]
+        after = ", ".join(
+            f"{r['start']} {_mean_sem(100 * r['accuracy'][-1], r['accuracy_sem'][-1], 100)}"
+            for r in summary
+        )
+        parts.append(
+            f"the supervised twin on {summary[0]['n_seeds']} seeds, test accuracy after one "
+            f"epoch: {after}"
+        )
+    for origin in ("individual", "mean"):
+        for measure, name in (("over the epoch", "area"), ("after one epoch", "end")):
+            row = row_of(card, "ch6.innate_start_supervised", f"from {origin}, {measure}")
+            texts |= row_texts(f"innate_sup_{origin}_{name}", row)
+    return texts | {"innate_status": "; ".join(parts)}
+
+
+def _mean_sem(mean: float, sem: float | None, scale: float = 1.0) -> str:
+    """``mean ± sem %`` (``sem`` times ``scale``), or the mean alone where the SEM is
+    missing (``None`` or NaN: one seed)."""
+    if sem is None or math.isnan(sem):
+        return f"{mean:.1f} %"
+    return f"{mean:.1f} ± {scale * sem:.1f} %"
+
+
+def evidence(records: Records) -> list[Row]:
+    """Fine-tuning from an innate start on the Ant (``innate_start_rows``)."""
+    payload = records.get("innate_start")
+    return [] if payload is None else innate_start_rows(payload["results"])
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 6 glues of innate starts, on the Ant and supervised (``innate_start``)."""
+    return innate_start(records.get("innate_start"), records.get("innate_start_supervised"), card)

@@ -36,14 +36,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from sgb import validation
+from sgb import stats, validation
 from sgb.cells import train_cells
+from sgb.claims import Row, judge
 from sgb.classifiers import DenseClassifier, dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.individuals import individual_kernels
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
+from sgb.results import Records
 from sgb.stats import sem
 from sgb.supervised import dense_accuracy, train_and_evaluate
 from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
@@ -225,3 +227,41 @@ def _write(recording: Recording, records: list[dict]) -> Path:
         "summary": summarise(records) if records else [],
     }
     return recording.write(results, recording.config.seeds, parts=records)
+
+
+def innate_supervised_rows(results: dict) -> list[Row]:
+    """The supervised twin (``sgb.experiments.innate_start_supervised``): per start
+    (individuals, mean network) and measure, the test accuracy less the fresh networks',
+    each a seed's mean over its networks, paired by seed. The measures: over the epoch
+    (the area under the accuracy curve over the steps, divided by them) and after it."""
+    records = results["records"]
+    if len(records) < 2:
+        return []
+
+    def score(record: dict, origin: str, measure: str) -> float:
+        runs = [r for r in record["runs"] if r["start"] == origin]
+        if measure == "after one epoch":
+            return 100 * np.mean([r["accuracy"][-1] for r in runs])
+        steps = np.asarray(runs[0]["steps"], dtype=float)
+        curve = np.mean([r["accuracy"] for r in runs], axis=0)
+        return 100 * float(np.sum(np.diff(steps) * (curve[1:] + curve[:-1]) / 2) / steps[-1])
+
+    rows = []
+    for measure in ("over the epoch", "after one epoch"):
+        fresh = [score(r, "fresh", measure) for r in records]
+        for origin in ("individual", "mean"):
+            rows.append(
+                judge(
+                    "ch6.innate_start_supervised",
+                    f"{results['dataset']}, from {origin}, {measure}",
+                    stats.paired([score(r, origin, measure) for r in records], fresh),
+                    f"{len(records)} seeds, one epoch",
+                )
+            )
+    return rows
+
+
+def evidence(records: Records) -> list[Row]:
+    """Fine-tuning from an innate start on Fashion-MNIST (``innate_supervised_rows``)."""
+    payload = records.get("innate_start_supervised")
+    return [] if payload is None else innate_supervised_rows(payload["results"])

@@ -40,8 +40,10 @@ from sgb.classifiers import dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.individuals import init_params
+from sgb.prose import Card
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
+from sgb.results import Records
 from sgb.stats import sem
 from sgb.supervised import make_model, train_and_evaluate
 from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
@@ -257,3 +259,31 @@ def _write(recording: Recording, sizes: tuple[int, ...], records: list[dict]) ->
         "summary": summarise(records) if records else [],
     }
     return recording.write(results, recording.config.seeds, parts=records)
+
+
+def mean_gap(results: dict) -> dict[str, str]:
+    """The moment-matched network (``mean_gap_fashion-mnist_cpu.json``'s results): at 10x
+    and 400x from rho -5 and at 10x from rho -7 (``gap10``, ``gap400``, ``gap10_rho7``),
+    each network's accuracy (% +- SEM), the recovery and the trained sigma; per rho start,
+    the hidden layer's rho travel and end (``gap_travel_5``, ``gap_rho_end_7``, ...), and
+    the training steps (``gap_steps``)."""
+    cells = {(r["setting"], r["rho_init"]): r for r in results["summary"]}
+    texts = {}
+    for name, cell in (("gap10", (785, -5.0)), ("gap400", (10, -5.0)), ("gap10_rho7", (785, -7.0))):
+        row = cells[cell]
+        for key in ("accuracy", "mean_network", "moment_network"):
+            texts[f"{name}_{key}"] = f"{100 * row[key]:.1f} ± {100 * row[key + '_sem']:.1f} %"
+        texts[f"{name}_recovery"] = f"{row['moment_recovery']:.2f}"
+        texts[f"{name}_sigma"] = f"{row['sigma_end']:.3f}"
+    for r in results["records"]:
+        if r["setting"] == 785 and r["seed"] == 0:
+            layer = r["layers"][0]
+            texts[f"gap_travel_{-r['rho_init']:g}"] = f"{layer['rho_travel_fraction']:.2f}"
+            texts[f"gap_rho_end_{-r['rho_init']:g}"] = f"{layer['end']['mean_rho']:.2f}"
+    texts["gap_steps"] = str(results["records"][0]["steps"])
+    return texts
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 4 glues of the moment-matched mean network (``mean_gap``)."""
+    return mean_gap(records("mean_gap")["results"])

@@ -55,12 +55,25 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+from scipy import stats as scipy_stats
 
-from sgb import stats, validation
+from sgb import claims, stats, validation
+from sgb.claims import (
+    Row,
+    genomes_at,
+    judge,
+    legs_row,
+    sd_below,
+    stored_test,
+    trained_steps,
+    variability_row,
+)
 from sgb.profiles import PROFILE_NAMES, check_profile
+from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.results import Payload, Records
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
@@ -449,3 +462,187 @@ def _write(recording: Recording, results: dict) -> Path:
     parts = [p for g in results["genomes"].values() for p in g["parts"].values()]
     seeds = sorted(g["evaluation_seed"] for g in results["genomes"].values())
     return recording.write(results, seeds, parts=parts)
+
+
+def _pooled_test(name: str, pooled: dict, n: int, transform=None) -> stats.Test:
+    """A random-effects pooled estimate (DerSimonian-Laird, normal interval) as a ``Test``;
+    ``transform`` maps Fisher's z back to r where the pooling was on z."""
+    estimate, (low, high) = pooled["random_effects"], pooled["random_effects_ci"]
+    se = pooled.get("random_effects_se", pooled.get("random_effects_z_se"))
+    z = (math.atanh(estimate) if transform else estimate) / se
+    detectable = 2.8 * se if transform is None else transform(2.8 * se)
+    p = float(2 * scipy_stats.norm.sf(abs(z)))
+    return stats.Test(name, estimate, low, high, math.inf, p, detectable, n)
+
+
+def populations_rows(results: dict) -> list[Row]:
+    """Figures 4E and 5 on several genomes per genome settings (``sgb.experiments.
+    populations``), pooled over the genomes by random effects. Figure 4E's r is compared
+    with the paper's as this measurement sees it, attenuated by the bodies' mean
+    reliabilities."""
+    rows = []
+    for settings, pooled in results["pooled"].items():
+        done = [
+            g["summary"]
+            for g in results["genomes"].values()
+            if g["settings"] == settings and "summary" in g
+        ]
+        n_genomes = len(done)
+        episodes = len(next(iter(results["genomes"].values()))["parts"]["normal"]["returns"][0])
+        who = "our" if settings == "ours" else "the authors'"
+        budget = f"{n_genomes} genomes x 100 individuals x {episodes} episodes"
+        label = f"ant, {who} genome, 64 types, {n_genomes} genomes pooled (random effects)"
+        diff = _pooled_test("pooled z", pooled["mean_network_percent"]["fixed_effect"], n_genomes)
+        rows.append(
+            judge(
+                "fig5.population_beats_mean",
+                label + ", % of the mean network's return",
+                diff,
+                budget,
+                unit="genomes",
+            )
+        )
+        rels = [
+            max(g["normal"]["variance_split"]["reliability"], 0.0)
+            * max(g["long_legs"]["variance_split"]["reliability"], 0.0)
+            for g in done
+        ]
+        r = _pooled_test(
+            "pooled Fisher z", pooled["legs_r"]["fixed_effect"], 100 * n_genomes, math.tanh
+        )
+        bound = max(g["normal"].get("between_sd_bound_percent", 0.0) for g in done)
+        attenuation = float(np.mean(np.sqrt(rels)))
+        rows.append(legs_row(label, r, attenuation, budget, sd_below(bound)))
+    for genome in results["genomes"].values():
+        if "summary" in genome:
+            who = "our" if genome["settings"] == "ours" else "the authors'"
+            setting = f"ant, {who} genome, 64 types, seed {genome['training_seed']}"
+            rows += [r for r in [variability_row(genome["summary"], setting)] if r]
+    return rows
+
+
+def regime_population_rows(results: dict) -> list[Row]:
+    """Figures 4E and 5 on the genome of the authors' training regime at the paper's budget
+    (``reproduce regime_populations``; one genome): Figure 5 under our protocol
+    (deterministic actions, the mean network on the same initial states, paired) and under
+    theirs (sampled actions), by their one-sample t and by Welch's t, both in % of the mean
+    network's return; Figure 4E's r against the paper's as these reliabilities see it."""
+    rows = []
+    for genome in results["genomes"].values():
+        summary = genome.get("summary")
+        if summary is None:
+            continue
+        n, episodes = np.shape(genome["parts"]["normal"]["returns"])
+        steps = "5 x 10^7 steps"
+        label = f"ant, the authors' regime, {steps}, 64 types, seed {genome['training_seed']}"
+        budget = f"1 genome x {n} individuals x {episodes} episodes"
+        ours = summary["mean_network"]
+        percent = 100 / ours["mean_network_return"]
+        tests = [("our protocol (paired, same states)", stored_test(ours["test"], percent))]
+        if "authors_protocol" in summary:
+            theirs = summary["authors_protocol"]
+            base = 100 / theirs["mean_network_mean"]
+            sampled = (
+                f"their protocol ({theirs['individual_episodes']} sampled episodes each, "
+                f"mean network {theirs['mean_network_episodes']})"
+            )
+            tests += [
+                (f"{sampled}, their one-sample t", stored_test(theirs["one_sample"], base)),
+                (f"{sampled}, Welch t", stored_test(theirs["welch"], base)),
+            ]
+        for protocol, test in tests:
+            rows.append(
+                judge(
+                    "fig5.population_beats_mean",
+                    f"{label}, {protocol}, % of the mean network's return",
+                    test,
+                    budget,
+                )
+            )
+        reliabilities = [
+            summary[b]["variance_split"]["reliability"] for b in ("normal", "long_legs")
+        ]
+        attenuation = math.sqrt(max(reliabilities[0], 0.0) * max(reliabilities[1], 0.0))
+        bound = summary["normal"].get("between_sd_bound_percent", 0.0)
+        legs = stored_test(summary["legs"]["test"])
+        rows.append(legs_row(label, legs, attenuation, budget, sd_below(bound)))
+        rows += [r for r in [variability_row(summary, label, "title.variability.regime")] if r]
+    return rows
+
+
+def populations(payload: Payload | None) -> dict[str, str]:
+    """The populations experiment (``rl/populations_ant_cpu.json``): ``pop_complete``
+    (genomes summarised) and, per genome settings, its Figure 5 and 4E rows
+    (``pop_fig5_{ours,authors}_*``, ``pop_fig4e_*``); without the file, "none of the
+    genomes" and ``NOT_RUN``."""
+    if payload is None:
+        return {"pop_complete": "none of the genomes"} | populations_rows_texts([])
+    genomes = payload["results"]["genomes"]
+    done = sum("summary" in g for g in genomes.values())
+    rows = populations_rows(payload["results"])
+    return {"pop_complete": f"{done} of {len(genomes)} genomes"} | populations_rows_texts(rows)
+
+
+def regime_populations(payload: Payload | None) -> dict[str, str]:
+    """Figures 4E and 5 on the genome of the authors' regime
+    (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``), the
+    normal body's test-retest reliability (``regime_pop_retest``: split-half r with its
+    95 % interval, and the reliability of the episode mean), and the rows of
+    ``regime_population_rows``: Figure 4E (``regime_pop_legs_*``) and Figure 5
+    under our protocol (``regime_pop_ours_*``), their one-sample t
+    (``regime_pop_theirs_*``) and Welch's (``regime_pop_welch_*``); ``NOT_RUN`` for all
+    without the file or its summary."""
+    rows = [] if payload is None else regime_population_rows(payload["results"])
+    fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"] + [None] * 3
+    texts = {"regime_pop_design": NOT_RUN, "regime_pop_retest": NOT_RUN}
+    if rows:
+        genome = next(g for g in payload["results"]["genomes"].values() if "summary" in g)
+        normal = genome["summary"]["normal"]
+        split, anova = normal["split_half"], normal["variance_split"]
+        texts["regime_pop_design"] = rows[0].budget
+        texts["regime_pop_retest"] = (
+            f"r = {split['r']:.2f} [{split['r_ci'][0]:.2f}, {split['r_ci'][1]:.2f}] between "
+            f"the means of the even and the odd of {split['episodes']} episodes, a "
+            f"reliability of {anova['reliability']:.2f} for the mean of all of them"
+        )
+    texts |= row_texts("regime_pop_legs", next((r for r in rows if r.key == "fig4e.r_legs"), None))
+    for name, row in zip(("ours", "theirs", "welch"), fig5, strict=False):
+        texts |= row_texts(f"regime_pop_{name}", row)
+    return texts
+
+
+def populations_rows_texts(rows: list[Row]) -> dict[str, str]:
+    """``row_texts`` of the populations experiment's Figure 5 and 4E rows per settings."""
+    card = claims.by_key(rows)
+    texts = {}
+    for who, settings in GENOMES:
+        for figure, key in (("fig5", "fig5.population_beats_mean"), ("fig4e", "fig4e.r_legs")):
+            texts |= row_texts(f"pop_{figure}_{settings}", row_of(card, key, who))
+    return texts
+
+
+def evidence(records: Records) -> list[Row]:
+    """The populations of Figure 3's genomes, pooled (``populations_rows``), their budget
+    the steps those genomes trained."""
+    payload = records.get("populations")
+    if payload is None:
+        return []
+    steps = trained_steps(records.get("fig3", "ant"))
+    return genomes_at(populations_rows(payload["results"]), steps)
+
+
+def regime_evidence(records: Records) -> list[Row]:
+    """The population of the regime's genome under both protocols
+    (``regime_population_rows``), their budget the steps that genome trained."""
+    payload = records.get("regime_populations")
+    if payload is None:
+        return []
+    steps = trained_steps(records.get("regime"))
+    return genomes_at(regime_population_rows(payload["results"]), steps)
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 5 glues of both populations."""
+    return regime_populations(records.get("regime_populations")) | populations(
+        records.get("populations")
+    )

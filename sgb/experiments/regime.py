@@ -30,10 +30,14 @@ from pathlib import Path
 
 import numpy as np
 
+from sgb import claims
+from sgb.claims import REGIME_SETTINGS, Row, figure3_rows, trained_steps
 from sgb.profiles import check_profile
+from sgb.prose import Card, row_texts
 from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
+from sgb.results import Payload, Records
 from sgb.rl.regime_runs import RUNS, run_config, train_regime
 from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
@@ -117,3 +121,72 @@ def summarise_regime(runs: list[dict]) -> list[dict]:
 
 # the registry reads an experiment's profiles here
 PROFILES = RUNS
+
+
+def regime_rows(results: dict, steps: int) -> list[Row]:
+    """Figure 3C at the paper's budget (``sgb.experiments.regime``): the level at 128 types
+    and the fall to 16 under the authors' regime, each run scored by its last evaluation
+    (the authors' window on all 2,048 training environments); per genome (their Gaussian
+    per pair, and their aliased pairs). A row appears once the two arms it compares have
+    two seeds each."""
+    runs = [{**r, "settings": r.get("genome", "authors")} for r in results["runs"]]
+    return figure3_rows(
+        {"runs": runs}, "ant", steps, "final_return", REGIME_SETTINGS, key_infix="regime."
+    )
+
+
+def _seeds(n: int) -> str:
+    return f"{n} seed" + ("" if n == 1 else "s")
+
+
+def regime(payload: Payload) -> dict[str, str]:
+    """The authors' regime (``rl/regime_ant_cpu.json``), from its summary per arm (mean
+    final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
+    on the authors' scale, its mean env-steps/s and wall time per run (``regime_*``),
+    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds, and the
+    scorecard's rows of the level at 128 types and the fall to 16 with the authors' genome
+    (``regime_level``, ``regime_fall``: estimate, interval and verdict; "no row yet" while
+    an arm they compare has one seed)."""
+    runs, summary = payload["results"]["runs"], payload["results"]["summary"]
+    steps = payload["provenance"]["config"]["ppo"]["total_steps"]
+    card = claims.by_key(regime_rows(payload["results"], steps))
+    genome = claims.REGIME_SETTINGS["authors"]
+    texts = {}
+    for name, key in (("level", "fig3.level_128.regime.ant"), ("fall", "fig3.fall_16.regime.ant")):
+        row = next((r for r in card.get(key, []) if r.setting.endswith(genome)), None)
+        found = row_texts("row", row)
+        texts[f"regime_{name}"] = (
+            "no row yet (an arm it compares has one seed)"
+            if row is None
+            else f"{found['row_ours']}, {found['row_verdict']}"
+        )
+    vanilla = next(s for s in summary if s["cell_types"] is None)
+    mine = [r for r in runs if r["cell_types"] is None]
+    n = len(vanilla["seeds"])
+    spread = "" if vanilla["sem_return"] is None else f" ± {vanilla['sem_return']:.0f} (SEM)"
+    arms = [s for s in summary if s["cell_types"] is not None]
+    return {
+        "regime_vanilla": f"{vanilla['mean_return']:.0f}{spread} over {_seeds(n)}",
+        "regime_steps": f"{mine[0]['eval_steps'][-1]:,}",
+        "regime_vanilla_scale": f"{vanilla['mean_authors_scale']:.2f}",
+        "regime_speed": f"{np.mean([r['train_steps_per_s'] for r in mine]):,.0f}",
+        "regime_wall": f"{np.mean([r['wall_time_s'] for r in mine]) / 3600:.1f} h",
+        "regime_sgb": "; ".join(
+            f"{s['cell_types']} types"
+            + ("" if s["genome"] == "authors" else ", pairs aliased")
+            + f": {s['fraction_of_vanilla']:.2f} of vanilla ({_seeds(len(s['seeds']))})"
+            for s in arms
+        )
+        or "none",
+    } | texts
+
+
+def evidence(records: Records) -> list[Row]:
+    """Figure 3C under the authors' regime (``regime_rows``)."""
+    payload = records.get("regime")
+    return [] if payload is None else regime_rows(payload["results"], trained_steps(payload))
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 5 glues of the regime's runs (``regime``)."""
+    return regime(records("regime"))

@@ -15,7 +15,9 @@ import numpy as np
 
 from sgb import genome
 from sgb.profiles import check_profile
+from sgb.prose import Card
 from sgb.recording import start
+from sgb.results import Records
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.protocols import (
@@ -145,3 +147,8 @@ def spread_runs(config: SpreadConfig, profile: str, out_dir: Path) -> list[dict]
 
 
 PROFILES = {p: spread_config(p) for p in ("smoke", "cpu", "paper")}
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 5 glues of the spreads (``spread_prose``)."""
+    return spread_prose(records("spread")["results"]["runs"])

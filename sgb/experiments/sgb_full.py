@@ -26,15 +26,27 @@ added to the results file at once (under that file's lock).
 import dataclasses
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 from tqdm.auto import tqdm
 
-from sgb import runlock, validation
+from sgb import runlock, stats, validation
+from sgb.claims import COUNTS, Row, accuracies, crossover_row, judge, nearest_pairs, welch_table
 from sgb.classifiers import dense_sizes
 from sgb.data import load
 from sgb.priors import GaussianPrior
+from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.recording import Recording, start
+from sgb.results import Payload, Records
 from sgb.supervised import ClassifierConfig
-from sgb.supervised_sweep import IMAGE_RATIOS, CompressionSweep, run_one, sweep_cells, sweep_summary
+from sgb.supervised_sweep import (
+    IMAGE_RATIOS,
+    CompressionSweep,
+    figure2_records,
+    run_one,
+    sweep_cells,
+    sweep_summary,
+)
 
 VARIANTS: dict[str, dict] = {
     "authors": {"kl_counting": "synapse", "rho_init": -7.0},
@@ -131,3 +143,318 @@ def _write(recording: Recording, sizes: tuple[int, ...], cells: dict) -> Path:
         },
     }
     return recording.write(results, full.sweep.seeds, parts=records)
+
+
+FULL_EPOCHS = 50
+
+
+FULL_BUDGET = f"SGB {FULL_EPOCHS} epochs, 3 draws a minibatch; DGB 500 rounds, best validation"
+
+
+SGB_VARIANTS = {
+    "authors": "KL per synapse, rho from -7: the authors'",
+    "per_pair": "KL per type pair, rho from -7",
+    "rho_ours": "KL per synapse, rho from -5",
+}
+
+
+def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str) -> list[Row]:
+    """'The SGB is better at high compression' at the authors' budgets: at every ratio
+    where at least 2 seeds of the authors' DGB layout trained all ``rounds``
+    (``sgb.experiments.dgb_full``), against each SGB variant of ``sgb.experiments.
+    sgb_full`` at the nearest ratio with at least 2 seeds; Welch's t over seeds, in
+    accuracy points. ``sgb_full``/``dgb_full``: the results of the two sweeps on ``dataset``
+    (its name as the book prints it)."""
+    dgb_records = figure2_records(dgb_full, rounds)
+    dgb = accuracies(dgb_records, "dgb", min_seeds=2)
+    targets = {  # each ratio's key as accuracies computes it, to its target ratio
+        float(np.mean([c["compression"] for c in dgb_records if c["setting"] == s])): s
+        for s in {c["setting"] for c in dgb_records}
+    }
+    rows = []
+    for variant in sgb_full["variants"]:
+        records = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
+        sgb = accuracies(records, "sgb", min_seeds=2)
+        for ratio_s, ratio_d in nearest_pairs(sgb, dgb):
+            test = stats.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
+            rows.append(
+                judge(
+                    "fig2.full.sgb_better_high",
+                    f"{dataset}, the authors' DGB layout at {ratio_d:.0f}x (target "
+                    f"{targets[ratio_d]:g}x), the SGB ({SGB_VARIANTS[variant]}) at {ratio_s:.0f}x",
+                    test,
+                    f"{test.n} seeds; {FULL_BUDGET}",
+                    amount=FULL_EPOCHS,
+                )
+            )
+    return rows
+
+
+def figure2_full_crossover(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str) -> list[Row]:
+    """``crossover_row`` at the authors' budgets (the results of ``sgb.experiments.
+    sgb_full`` and ``dgb_full``), for the SGB as the authors train it, over the ratios
+    where at least 2 seeds finished, under each count of compression; none before two DGB
+    ratios have."""
+    cells = [c for c in sgb_full["cells"].values() if c["variant"] == "authors"]
+    dgb_records = figure2_records(dgb_full, rounds)
+    rows = []
+    for count, words in COUNTS.items():
+        sgb = accuracies(cells, "sgb", min_seeds=2, count=count)
+        dgb = accuracies(dgb_records, "dgb", min_seeds=2, count=count)
+        if len(dgb) < 2 or len(sgb) < 2:
+            return []
+        seeds = min(v.size for v in [*sgb.values(), *dgb.values()])
+        setting = (
+            f"{dataset}, the authors' DGB layout, the SGB ({SGB_VARIANTS['authors']}), {words}"
+        )
+        budget = f"{seeds} seeds; {FULL_BUDGET}"
+        rows.append(crossover_row(sgb, dgb, setting, "fig2.full.crossover", budget, FULL_EPOCHS))
+    return rows
+
+
+def supervised_population_rows(sgb_full: dict, dataset: str) -> list[Row]:
+    """The abstract's population against its mean network on ``dataset`` (the results of
+    ``sgb.experiments.sgb_full``), per KL counting (the authors' per synapse, and per type
+    pair) and ratio with 2 seeds or more: the individuals' mean test accuracy minus the mean
+    network's, paired by seed, in points."""
+    rows = []
+    for variant in ("authors", "per_pair"):
+        cells = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
+        for setting in sorted({c["setting"] for c in cells}, reverse=True):
+            seeds = sorted((c for c in cells if c["setting"] == setting), key=lambda c: c["seed"])
+            if len(seeds) < 2:
+                continue
+            ratio = np.mean([c["compression"] for c in seeds])
+            test = stats.paired(
+                [100 * c["accuracy"] for c in seeds], [100 * c["mean_network"] for c in seeds]
+            )
+            rows.append(
+                judge(
+                    "abstract.population_beats_mean_supervised",
+                    f"{dataset}, the SGB ({SGB_VARIANTS[variant]}) at {ratio:.0f}x",
+                    test,
+                    f"{len(seeds)} seeds; SGB {FULL_EPOCHS} epochs, 3 draws a minibatch",
+                )
+            )
+    return rows
+
+
+def kl_share_row(sgb_full: dict, dgb_budget: dict, dataset: str) -> Row | None:
+    """Section 2.1's explanation of the DGB's lead at low compression, the KL term, at the
+    authors' budgets: the SGB with its KL counted once per type pair (a weaker KL, so smaller
+    spreads) minus the authors' SGB (per synapse) at the lowest ratio, Welch's t over seeds
+    in points, against the DGB's whole lead there (``sgb.experiments.dgb_budget``: one seed,
+    500 rounds, the network of best validation accuracy), which the KL would account for.
+    ``None`` before both variants have 2 seeds at that ratio."""
+    lowest = max(c["setting"] for c in sgb_full["cells"].values())
+    of = {
+        v: [c for c in sgb_full["cells"].values() if c["variant"] == v and c["setting"] == lowest]
+        for v in ("per_pair", "authors")
+    }
+    if min(len(cells) for cells in of.values()) < 2:
+        return None
+    per_pair, authors = (np.array([100 * c["accuracy"] for c in of[v]]) for v in of)
+    dgb = 100 * dgb_budget["records"][-1]["test_accuracy"]
+    lead = dgb - authors.mean()
+    ratio = np.mean([c["compression"] for c in of["authors"]])
+    return judge(
+        "fig2.kl_explains_low",
+        f"{dataset} at {ratio:.0f}x: the KL per type pair against per synapse (the authors'); "
+        f"the DGB {dgb:.1f} % against the authors' SGB {authors.mean():.1f} %",
+        stats.welch(per_pair, authors),
+        f"{min(per_pair.size, authors.size)} seeds; SGB {FULL_EPOCHS} epochs; the DGB one "
+        f"seed of {dgb_budget['records'][-1]['rounds']} rounds",
+        FULL_EPOCHS,
+        paper_effect=float(lead),
+        basis="the DGB's whole lead over the authors' SGB there, which the KL would account "
+        "for; the DGB's one seed gives it no interval",
+    )
+
+
+def sgb_variant_tests(
+    sgb_full: dict, variant: str, baseline: str = "authors", score: str = "accuracy"
+) -> pd.DataFrame:
+    """How much one change of the SGB's training moves Figure 2: ``variant`` minus
+    ``baseline`` (``welch_table``; variants of ``sgb.experiments.sgb_full``, whose results
+    are ``sgb_full``) at every ratio where both have 2 seeds or more, in the individuals'
+    accuracy (``score="accuracy"``) or the mean network's (``"mean_network"``)."""
+    cells = sgb_full["cells"].values()
+    of = {
+        name: accuracies([c for c in cells if c["variant"] == name], "sgb", 2, score)
+        for name in (variant, baseline)
+    }
+    pairs = [(v, b) for b, v in nearest_pairs(of[baseline], of[variant])]
+    return welch_table(of[variant], of[baseline], pairs, (variant, baseline))
+
+
+def sgb_full(payload: Payload | None) -> dict[str, str]:
+    """Figure 2's SGB as the paper and the authors train it (``sgb_full_*_cpu.json``): how
+    many of its cells are committed (``full_status``), the authors' variant's individuals
+    and mean network at its lowest compression (``full_low``: mean over its seeds, %), the
+    range of the trained hidden-layer sigma over all cells of the authors' variant
+    (``full_sigma``) and of our rho start (``full_rho_sigma``), and how far the individuals
+    of the KL per type pair (``full_pair_shift``) and of our rho start (``full_rho_shift``;
+    its mean networks, ``full_rho_mean_shift``) lie from the authors'
+    (``sgb_variant_tests``), and at how many ratios the rho
+    start makes a difference whose 95 % interval excludes 0 (``full_rho_conclusion``)."""
+    names = ("full_status", "full_low", "full_sigma", "full_rho_sigma")
+    shifts = ("full_pair_shift", "full_rho_shift", "full_rho_mean_shift", "full_rho_conclusion")
+    texts = dict.fromkeys(names + shifts, NOT_RUN)
+    if payload is None:
+        return texts
+    results = payload["results"]
+    cells = list(results["cells"].values())
+    config = payload["provenance"]["config"]
+    planned = (
+        len(config["variants"]) * len(config["sweep"]["ratios"]) * len(config["sweep"]["seeds"])
+    )
+    texts["full_status"] = f"{len(cells)} of its {planned} cells"
+    for variant, name in (("authors", "full_sigma"), ("rho_ours", "full_rho_sigma")):
+        sigma = [c["layers"][0]["mean_sigma"] for c in cells if c["variant"] == variant]
+        if sigma:
+            texts[name] = f"{min(sigma):.3f} to {max(sigma):.3f}"
+    authors = [c for c in cells if c["variant"] == "authors"]
+    if authors:
+        low = min(c["compression"] for c in authors)
+        at_low = [c for c in authors if c["compression"] == low]
+        texts["full_low"] = (
+            f"{100 * np.mean([c['accuracy'] for c in at_low]):.1f} % for the individuals and "
+            f"{100 * np.mean([c['mean_network'] for c in at_low]):.1f} % for the mean network "
+            f"at {low:.0f}x ({len(at_low)} seed{'s' if len(at_low) > 1 else ''})"
+        )
+    pair, rho = (sgb_variant_tests(results, v) for v in ("per_pair", "rho_ours"))
+    texts["full_pair_shift"], texts["full_rho_shift"] = _variant_shift(pair), _variant_shift(rho)
+    rho_mean = sgb_variant_tests(results, "rho_ours", score="mean_network")
+    texts["full_rho_mean_shift"] = _variant_shift(rho_mean)
+    if not rho.empty:
+        apart = _excluding_zero(rho)
+        texts["full_rho_conclusion"] = (
+            f"moves the individuals' accuracy measurably at {apart or 'none'} of the "
+            f"{len(rho)} ratio{'s' if len(rho) > 1 else ''}"
+        )
+    return texts
+
+
+def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
+    """Figure 2 at the authors' budgets: how many of the full-budget DGB's cells have
+    finished (``full_dgb_status``) and, at each of its planned ratios r, the scorecard row
+    of the SGB as the authors train it against it (``full{r}_verdict``, ``_ours``,
+    ``_detectable``, ``_decide``; ``row_texts``), and the crossover's rows under our count
+    of compression (``full_cross``) and the authors' (``full_cross_theirs``)."""
+    if dgb_payload is None:
+        return {"full_dgb_status": NOT_RUN}
+    config = dgb_payload["provenance"]["config"]
+    planned = len(config["ratios"]) * len(config["seeds"])
+    finished = len(figure2_records(dgb_payload["results"], config["dgb"]["rounds"]))
+    texts = {"full_dgb_status": f"{finished} of its {planned} cells"}
+    authors = SGB_VARIANTS["authors"]
+    for ratio in config["ratios"]:
+        row = row_of(card, "fig2.full.sgb_better_high", f"(target {ratio:g}x), the SGB ({authors})")
+        texts |= row_texts(f"full{ratio:.0f}", row)
+    for variant in SGB_VARIANTS:
+        rows = [
+            r
+            for r in card.get("fig2.full.sgb_better_high", [])
+            if f"the SGB ({SGB_VARIANTS[variant]})" in r.setting
+        ]
+        texts[f"full_lead_{variant}"] = _leads(rows)
+    ours = row_texts("full_cross", row_of(card, "fig2.full.crossover", "our count"))
+    theirs = row_of(card, "fig2.full.crossover", "the authors' count")
+    return texts | ours | row_texts("full_cross_theirs", theirs)
+
+
+def _leads(rows: list[Row]) -> str:
+    """Which side leads in ``rows`` (SGB minus DGB, points), in words."""
+    if not rows:
+        return NOT_RUN
+    estimates = [r.test.estimate for r in rows]
+    behind = [-e for e in estimates if e < 0]
+    ahead = [e for e in estimates if e >= 0]
+    parts = []
+    for count, gaps, where in ((len(behind), behind, "below"), (len(ahead), ahead, "above")):
+        if count:
+            span = f"{gaps[0]:.1f}" if count == 1 else f"{min(gaps):.1f} to {max(gaps):.1f}"
+            parts.append(f"{where} the DGB at {count} of {len(rows)} ratios (by {span} points)")
+    return "; ".join(parts)
+
+
+def supervised_population(card: Card) -> dict[str, str]:
+    """The supervised population against its mean network at the authors' budget
+    (``supervised_population_rows``), per KL counting: the range of the
+    individuals' lead over the ratios, and how many rows carry each verdict
+    (``suppop_authors``, ``suppop_per_pair``)."""
+    rows = card.get("abstract.population_beats_mean_supervised", [])
+    out = {}
+    for name in ("authors", "per_pair"):
+        mine = [r for r in rows if f"({SGB_VARIANTS[name]})" in r.setting]
+        if not mine:
+            out[f"suppop_{name}"] = NOT_RUN
+            continue
+        leads = [r.test.estimate for r in mine]
+        verdicts_found = [r.verdict for r in mine]
+        counts = ", ".join(
+            f"**{verdicts_found.count(v)}** {v}" for v in dict.fromkeys(verdicts_found)
+        )
+        out[f"suppop_{name}"] = (
+            f"{min(leads):+.1f} to {max(leads):+.1f} points over {len(mine)} ratios ({counts})"
+        )
+    return out
+
+
+def kl_share(card: Card) -> dict[str, str]:
+    """Section 2.1's KL explanation at about 10x (``kl_share_row``): the row's texts
+    (``kl_share_*``) and the DGB's lead it is weighed against (``kl_share_lead``)."""
+    row = row_of(card, "fig2.kl_explains_low")
+    lead = NOT_RUN if row is None else f"{row.paper_effect:.1f} points"
+    return row_texts("kl_share", row) | {"kl_share_lead": lead}
+
+
+def _excluding_zero(table) -> int:
+    """How many rows of a ``sgb_variant_tests`` table have a 95 % interval without 0."""
+    return int(((table["95 % CI low"] > 0) | (table["95 % CI high"] < 0)).sum())
+
+
+def _variant_shift(table) -> str:
+    """A ``sgb_variant_tests`` table in words: the range of its differences, how many
+    of its 95 % intervals exclude 0, and the largest difference detectable at 80 % power."""
+    if table.empty:
+        return NOT_RUN
+    shift = table.iloc[:, 0]
+    apart = _excluding_zero(table)
+    return (
+        f"{shift.min():+.1f} to {shift.max():+.1f} points over {len(table)} ratio"
+        f"{'s' if len(table) > 1 else ''} ({apart} of whose 95 % intervals exclude 0; "
+        f"at 80 % power a difference of {table['detectable at 80 % power'].max():.1f} points "
+        "is detected at each)"
+    )
+
+
+BOOK_DATASET = "Fashion-MNIST"  # the dataset of the committed sweeps the book reads
+
+
+def evidence(records: Records) -> list[Row]:
+    """Figure 2 at the authors' budgets (this sweep against ``dgb_full``'s): the SGB
+    against the DGB at each ratio and the crossover under both counts, the population
+    against its mean network, and the KL's share of the DGB's lead (``dgb_budget``)."""
+    sgb, dgb = records.get("sgb_full"), records.get("dgb_full")
+    if sgb is None or dgb is None:
+        return []
+    rounds = dgb["provenance"]["config"]["dgb"]["rounds"]
+    rows = figure2_full_rows(sgb["results"], dgb["results"], rounds, BOOK_DATASET)
+    rows += figure2_full_crossover(sgb["results"], dgb["results"], rounds, BOOK_DATASET)
+    rows += supervised_population_rows(sgb["results"], BOOK_DATASET)
+    budget = records.get("dgb_budget")
+    share = (
+        None if budget is None else kl_share_row(sgb["results"], budget["results"], BOOK_DATASET)
+    )
+    return rows + ([share] if share else [])
+
+
+def texts(records: Records, card: Card) -> dict[str, str]:
+    """What chapter 4 glues of Figure 2 at the authors' budgets."""
+    return (
+        sgb_full(records("sgb_full"))
+        | figure2_full(records("dgb_full"), card)
+        | supervised_population(card)
+        | kl_share(card)
+    )
