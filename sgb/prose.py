@@ -64,3 +64,10 @@ def percent(value: float) -> str:
 
 
 # Chapter 6 --------------------------------------------------------------------------------
+
+
+def mean_sem(mean: float, sem: float, scale: float = 1.0, decimals: int = 0) -> str:
+    """``mean ± sem`` as text (``sem`` omitted where NaN: one seed)."""
+    if math.isnan(sem):
+        return f"{scale * mean:.{decimals}f}"
+    return f"{scale * mean:.{decimals}f} ± {scale * sem:.{decimals}f}"

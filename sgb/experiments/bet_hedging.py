@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from sgb import claims, hedging, stats, validation
 from sgb.claims import CLAIMS, Row, judge, untestable
@@ -272,3 +273,26 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 6 glues of bet-hedging (``bet_hedging``)."""
     return bet_hedging(records.get("bet_hedging"))
+
+
+def hedging_table(payload: Payload, q: str = "0.5") -> pd.DataFrame:
+    """Bet-hedging (``sgb.experiments.bet_hedging``), one row per genome and population:
+    the trained sigma, the fitness scale (the mean network's mean return at home), the
+    geometric and arithmetic mean fitness, and P(at least k survive) at threshold ``q``
+    for every k."""
+    rows = []
+    for g in payload["results"]["genomes"]:
+        for population, score in g["scores"].items():
+            rows.append(
+                {
+                    "rho start": g["rho_init"],
+                    "seed": g["training_seed"],
+                    "sigma trained": g["sigma_trained"],
+                    "population": population,
+                    "home return": g["scale"],
+                    "geometric fitness": score["geometric_fitness"],
+                    "mean fitness": score["mean_fitness"],
+                    **{f"P(>= {k} survive)": p for k, p in score["p_at_least"][q].items()},
+                }
+            )
+    return pd.DataFrame(rows)

@@ -18,6 +18,7 @@ run continues where it stopped; the state file is removed when the run ends.
 import time
 from pathlib import Path
 
+import pandas as pd
 from tqdm.auto import tqdm
 
 from sgb.budget import BudgetConfig, sizes_and_width, train_with_budget
@@ -138,3 +139,17 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     uncompressed network of Figure 2's cpu sweep."""
     dense = records("fig2")["results"]["ours"]["summary"]["dense"]["mean"][0]
     return dgb_budget(records("dgb_budget")["results"], dense)
+
+
+def dgb_budget_table(results: dict) -> pd.DataFrame:
+    """The DGB budget run (``sgb.experiments.dgb_budget``), one row per recorded round:
+    best validation accuracy, its network's test accuracy and the generated network's (%)."""
+    return pd.DataFrame(
+        {
+            "rounds": r["rounds"],
+            "best validation %": 100 * r["best_validation_accuracy"],
+            "its test %": 100 * r["test_accuracy"],
+            "generated test %": 100 * r["generated_test_accuracy"],
+        }
+        for r in results["records"]
+    )

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pandas as pd
 
 from sgb import claims, stats, validation
 from sgb.cells import train_cells
@@ -214,3 +215,25 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 6 glues of evolution (``evolution``)."""
     return evolution(records("evolution"))
+
+
+def evolution_table(payload: Payload) -> pd.DataFrame:
+    """Evolution without gradients (``sgb.experiments.evolution``), one row per cell:
+    hidden types, compression (ours), genome, seed, the last generation's mean fitness,
+    the test accuracy (%) of the evolved genome's individuals (their mean and SD, in
+    points) and of its mean network, the evolved spreads' mean sigma and the wall time."""
+    return pd.DataFrame(
+        {
+            "hidden types": r["hidden_types"],
+            "compression": r["compression"],
+            "genome": "stochastic" if r["stochastic"] else "deterministic",
+            "seed": r["seed"],
+            "last fitness": r["mean_fitness"][-1],
+            "individuals (% accuracy)": 100 * float(np.mean(r["individuals"])),
+            "SD of individuals (points)": 100 * float(np.std(r["individuals"], ddof=1)),
+            "mean network (% accuracy)": 100 * r["mean_network"],
+            "sigma": r["sigma_mean"],
+            "wall time (s)": r["wall_time_s"],
+        }
+        for r in payload["results"]["records"]
+    )

@@ -213,3 +213,29 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 4 glues of the cpu sweep (``figure2``)."""
     return figure2(records("fig2")["results"], card)
+
+
+def figure2_table(results: dict) -> pd.DataFrame:
+    """A Figure 2 sweep (``sgb.experiments.fig2``), one row per model and setting: its
+    compression counted both ways, and innate test accuracy (%) mean and SEM over seeds
+    (NaN with one seed)."""
+    ours, theirs = results["ours"]["summary"], results["authors"]["summary"]
+    rows = []
+    for model in ("dense", "sgb", "dgb"):
+        authors_compression = dict(
+            zip(theirs[model]["setting"], theirs[model]["compression"], strict=True)
+        )
+        for i, setting in enumerate(ours[model]["setting"]):
+            sem = ours[model]["sem"][i]
+            rows.append(
+                {
+                    "model": model,
+                    "setting": setting,
+                    "compression (ours)": ours[model]["compression"][i],
+                    "compression (authors')": authors_compression[setting],
+                    "accuracy %": 100 * ours[model]["mean"][i],
+                    "SEM %": float("nan") if sem is None else 100 * sem,
+                    "seeds": ours[model]["n"][i],
+                }
+            )
+    return pd.DataFrame(rows)

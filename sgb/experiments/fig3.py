@@ -10,6 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from sgb import stats, verdicts
 from sgb.claims import CLAIMS, Row, figure3_rows, judge, run_returns, trained_steps
@@ -240,3 +241,64 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of Figure 3's sweeps (``figure3``)."""
     return figure3(records("fig3", "ant"), records("fig3", "halfcheetah"), card)
+
+
+def fig3_summary(payload: Payload) -> list[dict]:
+    """A Figure 3 sweep's summary rows (one per settings and cell types), scored by the
+    mean of the last two evaluations where the file has that score, else by the last."""
+    results = payload["results"]
+    return results.get("summary_last_two", results["summary"])
+
+
+def fig3_seeds(payload: Payload) -> list[dict]:
+    """Each SGB run of a Figure 3 sweep as a fraction of the mean vanilla return, scored as
+    ``fig3_summary`` scores it (the mean of the last two evaluations where the file has that
+    summary): settings, cell types, seed and fraction; their means are the summary's."""
+    results = payload["results"]
+    score = "last_two_return" if "summary_last_two" in results else "final_return"
+    vanilla = next(r["mean_return"] for r in fig3_summary(payload) if r["cell_types"] is None)
+    return [
+        {
+            "settings": r["settings"],
+            "cell_types": r["cell_types"],
+            "seed": r["seed"],
+            "fraction": r[score] / vanilla,
+        }
+        for r in results["runs"]
+        if r["cell_types"] is not None
+    ]
+
+
+FIG3_COLUMNS = {
+    "env": "body",
+    "settings": "genome",
+    "cell_types": "cell types",
+    "mean_return": "mean return",
+    "sem_return": "SEM of return",
+    "fraction": "fraction of vanilla",
+    "sem_fraction": "SEM of fraction",
+    "n_seeds": "seeds",
+}
+
+
+FIG3_GENOMES = {
+    "ours": "ours",
+    "authors": "the authors'",
+    "ours_typed_inputs": "ours, inputs typed",
+    "authors_untyped_inputs": "the authors', inputs untyped",
+}
+
+
+def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
+    """Figure 3 sweeps, one row per body, genome settings (``FIG3_GENOMES``) and cell types
+    ("vanilla" for PPO), each run scored as the verdicts score it (``fig3_summary``: the
+    mean of its last two evaluations where the file has it); columns named as
+    ``FIG3_COLUMNS`` maps the files' keys."""
+    tables = []
+    for payload in payloads:
+        table = pd.DataFrame(fig3_summary(payload)).assign(env=payload["results"]["env"])
+        tables.append(table)
+    table = pd.concat(tables, ignore_index=True)
+    table["cell_types"] = ["vanilla" if pd.isna(k) else f"{k:.0f}" for k in table["cell_types"]]
+    table["settings"] = [FIG3_GENOMES.get(s, s) for s in table["settings"]]
+    return table[list(FIG3_COLUMNS)].rename(columns=FIG3_COLUMNS)

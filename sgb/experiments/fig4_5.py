@@ -12,6 +12,7 @@ from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from sgb import stats, verdicts
 from sgb.claims import Row, episodes_to_decide, genomes_at, judge, legs_row, trained_steps
@@ -19,7 +20,7 @@ from sgb.profiles import PROFILE_NAMES
 from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.recording import start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
-from sgb.results import Records
+from sgb.results import Payload, Records
 from sgb.rl.protocols import (
     PopulationConfig,
     authors_protocol,
@@ -197,3 +198,28 @@ def fig5_evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of Figures 4 and 5 and of the title's variability."""
     return figures4_5(card) | variability(card)
+
+
+def fig45_statistics(fig4: Payload, fig5: Payload) -> pd.DataFrame:
+    """Figures 4E/F and 5 in numbers, one row per test: Pearson r between bodies and
+    between niches; our paired t and the authors' one-sample t, with the mean returns of
+    the individuals and of the mean network (the centres of their 99 % intervals)."""
+    legs, niches = fig4["results"]["legs"], fig4["results"]["niches"]
+    paired, authors = fig5["results"]["mean_network"], fig5["results"]["authors_protocol"]
+    rows = [
+        {"figure": "4E", "test": "Pearson r, normal body vs long legs", **legs},
+        {"figure": "4F", "test": "Pearson r, slippery vs low gravity", **niches},
+        {"figure": "5", "test": "paired t (our protocol)", **paired},
+        {"figure": "5", "test": "one-sample t (the authors' protocol)", **authors},
+    ]
+    return pd.DataFrame(
+        {
+            "figure": row["figure"],
+            "test": row["test"],
+            "statistic": row["r"] if "r" in row else row["t"],
+            "p": row["p"],
+            "individuals' mean return": row.get("individuals_ci99", [math.nan])[0],
+            "mean network's return": row.get("mean_network_ci99", [math.nan])[0],
+        }
+        for row in rows
+    )

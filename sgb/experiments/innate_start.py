@@ -65,11 +65,12 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from sgb import stats, validation
 from sgb.claims import Row, judge
 from sgb.profiles import PROFILE_NAMES, check_profile
-from sgb.prose import NOT_RUN, Card, row_of, row_texts
+from sgb.prose import NOT_RUN, Card, mean_sem, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Payload, Records
@@ -430,7 +431,7 @@ def innate_start(ant: Payload | None, supervised: Payload | None, card: Card) ->
     else:
         summary = supervised["results"]["summary"]
         after = ", ".join(
-            f"{r['start']} {_mean_sem(100 * r['accuracy'][-1], r['accuracy_sem'][-1], 100)}"
+            f"{r['start']} {_percent_sem(100 * r['accuracy'][-1], r['accuracy_sem'][-1], 100)}"
             for r in summary
         )
         parts.append(
@@ -444,7 +445,7 @@ def innate_start(ant: Payload | None, supervised: Payload | None, card: Card) ->
     return texts | {"innate_status": "; ".join(parts)}
 
 
-def _mean_sem(mean: float, sem: float | None, scale: float = 1.0) -> str:
+def _percent_sem(mean: float, sem: float | None, scale: float = 1.0) -> str:
     """``mean ± sem %`` (``sem`` times ``scale``), or the mean alone where the SEM is
     missing (``None`` or NaN: one seed)."""
     if sem is None or math.isnan(sem):
@@ -461,3 +462,30 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 6 glues of innate starts, on the Ant and supervised (``innate_start``)."""
     return innate_start(records.get("innate_start"), records.get("innate_start_supervised"), card)
+
+
+def innate_start_table(payload: Payload) -> pd.DataFrame:
+    """Learning from an innate start, one row per genome and start, means ± SEM over seeds:
+    for the Ant (``sgb.experiments.innate_start``) the return per episode at 0, 1/4, 1/2 and
+    all of the fine-tuning, the mean return over it (area under the curve over its steps) and
+    that less the fresh network's; for Fashion-MNIST
+    (``sgb.experiments.innate_start_supervised``) the test accuracy (%) at each recorded
+    step."""
+    rows = []
+    for s in payload["results"]["summary"]:
+        row = {"start": s["start"]}
+        if "genome" in s:
+            row["genome"] = s["genome"] or "none (fresh network)"
+        row["seeds"] = s["n_seeds"]
+        if "steps" in s:
+            for step, mean, sem in zip(s["steps"], s["accuracy"], s["accuracy_sem"], strict=True):
+                row[f"step {step} (% accuracy)"] = mean_sem(mean, sem, 100.0, 1)
+        else:
+            for at in ("0", "0.25", "0.5", "1"):
+                row[f"return at {at}"] = mean_sem(s[f"return_at_{at}"], s[f"return_at_{at}_sem"])
+            row["mean return over fine-tuning"] = mean_sem(s["auc"], s["auc_sem"])
+            row["less the fresh network's"] = mean_sem(
+                s["auc_minus_fresh"], s["auc_minus_fresh_sem"]
+            )
+        rows.append(row)
+    return pd.DataFrame(rows)

@@ -33,6 +33,7 @@ from typing import Any
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pandas as pd
 
 from sgb import moments, validation
 from sgb.cells import train_cells
@@ -40,7 +41,7 @@ from sgb.classifiers import dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.individuals import init_params
-from sgb.prose import Card
+from sgb.prose import Card, mean_sem
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
@@ -287,3 +288,27 @@ def mean_gap(results: dict) -> dict[str, str]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 4 glues of the moment-matched mean network (``mean_gap``)."""
     return mean_gap(records("mean_gap")["results"])
+
+
+def mean_gap_table(results: dict) -> pd.DataFrame:
+    """The mean network's gap (``sgb.experiments.mean_gap``), one row per cell (hidden
+    types, rho start): compression both ways, seeds, and means ± SEM over seeds of the test
+    accuracy (%) of the individuals, their mean network and the moment-matched network, the
+    gap individuals minus mean network (points), the trained sigma and the moment-matched
+    network's recovery of that gap (a ratio)."""
+    return pd.DataFrame(
+        {
+            "hidden types": s["setting"],
+            "rho start": s["rho_init"],
+            "compression (ours)": s["compression"],
+            "compression (authors')": s["compression_authors"],
+            "seeds": s["n"],
+            "individuals %": mean_sem(s["accuracy"], s["accuracy_sem"], 100.0, 1),
+            "mean network %": mean_sem(s["mean_network"], s["mean_network_sem"], 100.0, 1),
+            "moment-matched %": mean_sem(s["moment_network"], s["moment_network_sem"], 100.0, 1),
+            "gap (points)": mean_sem(s["gap"], s["gap_sem"], 100.0, 1),
+            "trained sigma": mean_sem(s["sigma_end"], s["sigma_end_sem"], 1.0, 4),
+            "recovery": mean_sem(s["moment_recovery"], s["moment_recovery_sem"], 1.0, 2),
+        }
+        for s in results["summary"]
+    )

@@ -29,6 +29,7 @@ import functools
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from sgb import claims
 from sgb.claims import REGIME_SETTINGS, Row, figure3_rows, trained_steps
@@ -190,3 +191,22 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the regime's runs (``regime``)."""
     return regime(records("regime"))
+
+
+REGIME_COLUMNS = {
+    "cell_types": "cell types",
+    "seed": "seed",
+    "final_return": "final return",
+    "last_two_return": "mean of last two returns",
+    "authors_scale": "final, authors' scale",
+    "train_steps_per_s": "env steps/s",
+    "wall_time_s": "wall time (s)",
+}
+
+
+def regime_table(payload: Payload) -> pd.DataFrame:
+    """The authors' regime (``sgb.experiments.regime``), one row per run: final and
+    last-two evaluation returns, the final one on the authors' Figure 3 scale, training
+    env-steps/s and wall time; columns named as ``REGIME_COLUMNS`` maps the files' keys."""
+    runs = pd.DataFrame(payload["results"]["runs"])[list(REGIME_COLUMNS)]
+    return runs.rename(columns=REGIME_COLUMNS)

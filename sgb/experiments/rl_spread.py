@@ -12,12 +12,13 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 from sgb import genome
 from sgb.profiles import check_profile
 from sgb.prose import Card
 from sgb.recording import start
-from sgb.results import Records
+from sgb.results import Payload, Records
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.protocols import (
@@ -152,3 +153,22 @@ PROFILES = {p: spread_config(p) for p in ("smoke", "cpu", "paper")}
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the spreads (``spread_prose``)."""
     return spread_prose(records("spread")["results"]["runs"])
+
+
+def spread_table(payload: Payload) -> pd.DataFrame:
+    """The spread sweep (``sgb.experiments.rl_spread``), one row per run: initial and
+    trained sigma, mean returns of the individuals and the mean network, the SD of the
+    individuals' returns, and the paired t over individuals with its p."""
+    return pd.DataFrame(
+        {
+            "sigma start": r["sigma_init"],
+            "seed": r["seed"],
+            "sigma trained": r["sigma_trained"],
+            "individuals": r["individuals_mean"],
+            "mean network": r["mean_network_mean"],
+            "SD of individuals": r["individuals_sd"],
+            "paired t(99)": r["paired_test"]["t"],
+            "p": r["paired_test"]["p"],
+        }
+        for r in payload["results"]["runs"]
+    )

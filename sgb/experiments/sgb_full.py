@@ -458,3 +458,40 @@ def texts(records: Records, card: Card) -> dict[str, str]:
         | supervised_population(card)
         | kl_share(card)
     )
+
+
+def sgb_full_table(payload: Payload) -> pd.DataFrame:
+    """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``),
+    one row per variant and number of hidden types, over the seeds finished: compression
+    under both conventions, the seeds, the test accuracy (%) of the individuals (mean over
+    seeds of each seed's mean, and its SD over seeds, in points) and of the mean network, the
+    trained sigma of each layer (its synapses' mean, mean over seeds)."""
+    cells = pd.DataFrame(
+        {
+            "variant": r["variant"],
+            "hidden types": r["setting"],
+            "compression (ours)": r["compression"],
+            "compression (authors')": r["compression_authors"],
+            "seed": r["seed"],
+            "individuals %": 100 * r["accuracy"],
+            "mean network %": 100 * r["mean_network"],
+            **{f"sigma, layer {i}": layer["mean_sigma"] for i, layer in enumerate(r["layers"])},
+        }
+        for r in payload["results"]["cells"].values()
+    )
+    sigmas = [c for c in cells.columns if c.startswith("sigma")]
+    how = {
+        "compression (ours)": ("compression (ours)", "mean"),
+        "compression (authors')": ("compression (authors')", "mean"),
+        "seeds": ("seed", "count"),
+        "individuals %": ("individuals %", "mean"),
+        "SD of individuals (points)": ("individuals %", "std"),
+        "mean network %": ("mean network %", "mean"),
+        **{c: (c, "mean") for c in sigmas},
+    }
+    return (
+        cells.groupby(["variant", "hidden types"])
+        .agg(**how)
+        .sort_values(["variant", "compression (ours)"])
+        .reset_index()
+    )

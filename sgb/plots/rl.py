@@ -22,7 +22,7 @@ def plot_sweep(summary: list[dict], env: str, seeds: list[dict] | None = None, a
     """Innate return as a fraction of vanilla PPO against the number of cell types (SEM
     bars; each point the mean innate return of an agent's individuals), one line per genome
     settings, the legend under the axes; each seed a faint dot where ``seeds`` (rows of
-    ``sgb.results.fig3_seeds``) are given, spread a little sideways by seed."""
+    ``sgb.experiments.fig3.fig3_seeds``) are given, spread a little sideways by seed."""
     ax = axes_or_new(ax)
     types = set()
     for settings, (color, marker, label) in SETTINGS_STYLE.items():
