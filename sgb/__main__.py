@@ -138,6 +138,12 @@ def build_parser() -> argparse.ArgumentParser:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     commands.add_parser(
+        "manifest",
+        help="enter results files written elsewhere into results/MANIFEST.json, once checked "
+        "(python -m sgb manifest --help)",
+        add_help=False,
+    )
+    commands.add_parser(
         "grid",
         help="the background queue of long runs: start, status, land, stop "
         "(python -m sgb grid --help)",
@@ -246,6 +252,10 @@ def main(argv: list[str] | None = None) -> int:
         from sgb import grid
 
         return grid.main(argv[1:], main)
+    if argv[:1] == ["manifest"]:
+        from sgb import gather, manifest
+
+        return manifest.main(argv[1:], gather.model_of)
     args = build_parser().parse_args(argv)
     options = {k: v for k, v in (("dataset", args.dataset), ("env", args.env)) if v is not None}
     experiment = get_experiment(args.experiment)

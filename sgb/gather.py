@@ -9,9 +9,10 @@ file missing from the results directory leaves its rows out; a damaged one is re
 
 from pathlib import Path
 
+from sgb import schemas
 from sgb.claims import Row, untestable
 from sgb.experiments import EXPERIMENTS, results_files
-from sgb.results import Records
+from sgb.results import Records, Source
 
 # the experiments whose evidence makes the scorecard's rows, in its order
 EVIDENCE = (
@@ -29,8 +30,13 @@ EVIDENCE = (
     "innate_start",
     "innate_start_supervised",
 )
-# results read beside the experiments': name -> part -> file (as ``results_files``)
-BENCHMARKS = {"bench_backends": {"": "rl/bench_backends.json"}}  # benchmarks/bench_backends.py
+# the benchmarks' results (``benchmarks/``), read beside the experiments'
+BENCHMARKS = {
+    "bench_backends": Source({"": "rl/bench_backends.json"}, schemas.BenchBackends),
+    "bench_rl": Source({"": "rl/bench_rl.json"}, schemas.BenchRl),
+    "bench_regime": Source({"": "rl/bench_regime.json"}, schemas.BenchRegime),
+    "bench_parallel": Source({"": "bench_parallel.json"}, schemas.BenchParallel),
+}
 # claim key -> why no run here can test it
 UNTESTABLE = {
     "fig4f.r_terrain": "ANYmal on terrain needs Isaac Gym and a GPU; Brax's spring backend "
@@ -39,9 +45,26 @@ UNTESTABLE = {
 }
 
 
+def sources() -> dict[str, Source]:
+    """Every experiment's and benchmark's results files and their model."""
+    return {name: Source(*found) for name, found in results_files().items()} | BENCHMARKS
+
+
 def records(results_dir: str | Path | None = None) -> Records:
     """The results under ``results_dir`` (default: the committed ones), read by experiment."""
-    return Records(results_files() | BENCHMARKS, results_dir)
+    return Records(sources(), results_dir)
+
+
+def model_of(name: str) -> type[schemas.ResultsFile]:
+    """The model of the results file ``name`` (its path under the results directory, as an
+    experiment or benchmark declares it); a ValueError naming it where none does."""
+    found = [s.model for s in sources().values() if name in s.files.values()]
+    if not found:
+        raise ValueError(
+            f"no experiment or benchmark declares the results file {name} "
+            "(sgb.experiments.EXPERIMENTS' results, sgb.gather.BENCHMARKS)"
+        )
+    return found[0]
 
 
 def scorecard(results_dir: str | Path | None = None) -> list[Row]:

@@ -38,7 +38,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
-from sgb import cluster, resume, runlock
+from sgb import cluster, gather, resume, runlock
 from sgb.manifest import MAINTAINER_FLAG, add
 from sgb.provenance import atomic_write
 from sgb.queued import Queue
@@ -310,7 +310,7 @@ def main(argv: list[str], reproduce: Callable[[list[str]], int]) -> int:
                 print("\n".join(describe(queue)))
         else:
             landed = land(tree / "results", REPOSITORY / "results")
-            entered = add(landed.results) if landed.results else []
+            entered = add(landed.results, gather.model_of) if landed.results else []
             for path in landed.runs + landed.results:
                 print(f"landed {path.relative_to(REPOSITORY)}")
             print(

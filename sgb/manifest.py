@@ -9,10 +9,10 @@ scorecard read) refuse a file whose bytes differ from its entry, or that has non
 wrote elsewhere (a worktree at another commit, a GPU machine) is entered by a maintainer
 once it is copied in:
 
-    python -m sgb.manifest --maintainer-write-committed results/rl/fig5_ant_cpu.json
+    python -m sgb manifest --maintainer-write-committed results/rl/fig5_ant_cpu.json
 
-which checks it first (``add``). Checkpoints (``results/*/checkpoints/``) and smoke runs,
-which git ignores, are not entered.
+which checks it first (``add``, under the model its experiment declares). Checkpoints
+(``results/*/checkpoints/``) and smoke runs, which git ignores, are not entered.
 """
 
 import argparse
@@ -20,7 +20,7 @@ import hashlib
 import json
 import subprocess
 import sys
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path, PurePosixPath
 
 from sgb import runlock, schemas
@@ -35,7 +35,7 @@ MAINTAINER_FLAG = "--maintainer-write-committed"
 REPOSITORY = Path(__file__).resolve().parent.parent  # the git checkout of this package
 ABOUT = (
     "sha256 of the bytes of each results file, entered by the run that wrote it or by "
-    "python -m sgb.manifest (sgb.manifest); not to be edited by hand"
+    "python -m sgb manifest (sgb.manifest); not to be edited by hand"
 )
 
 
@@ -138,7 +138,7 @@ def verify(path: str | Path, root: str | Path | None = None) -> None:
     )
     remedy = (
         f"{_restore(root, name)} or run its experiment again with --maintainer-write-committed; "
-        f"a file a run wrote elsewhere is entered with python -m sgb.manifest "
+        f"a file a run wrote elsewhere is entered with python -m sgb manifest "
         f"--maintainer-write-committed {path}"
     )
     raise CorruptFile(path, problem, remedy, "results file")
@@ -167,13 +167,15 @@ def _check_commit(path: Path, commit: object, repository: Path) -> None:
         )
 
 
-def add(paths: Iterable[str | Path]) -> list[str]:
+def add(
+    paths: Iterable[str | Path], model_of: Callable[[str], type[schemas.ResultsFile]]
+) -> list[str]:
     """Enter results files a run wrote elsewhere into the committed results' manifest, once
     each passes the checks: it lies in the committed results and the manifest covers it,
     the commit of its provenance is one of this repository, its payload matches the
-    checksum its run wrote (where it wrote one) and it parses under its schema
-    (``sgb.schemas``). Returns their names; if one fails (a ValueError or CorruptFile
-    naming it), none is entered."""
+    checksum its run wrote (where it wrote one) and it parses under its model
+    (``model_of(name)``, e.g. ``sgb.gather.model_of``). Returns their names; if one fails
+    (a ValueError or CorruptFile naming it), none is entered."""
     root = _committed()
     if root is None:
         raise ValueError("no committed results next to the sgb package to enter files into")
@@ -187,16 +189,16 @@ def add(paths: Iterable[str | Path]) -> list[str]:
             )
         payload = read_results(file, schemas.REWRITE)
         verify_checksum(file, payload, schemas.REWRITE)
-        schemas.check(name, payload, file)
+        schemas.check(model_of(name), payload, file)
         _check_commit(file, payload["provenance"]["git_commit"], REPOSITORY)
     _enter(root, files)
     return [_name(file, root) for file in files]
 
 
-def main(argv: list[str] | None = None) -> int:
-    """``python -m sgb.manifest --maintainer-write-committed PATH...``: ``add``."""
+def main(argv: list[str], model_of: Callable[[str], type[schemas.ResultsFile]]) -> int:
+    """``python -m sgb manifest --maintainer-write-committed PATH...``: ``add``."""
     parser = argparse.ArgumentParser(
-        prog="python -m sgb.manifest",
+        prog="python -m sgb manifest",
         description="Enter results files that a run wrote on another machine, and that are "
         "now copied into the committed results/, into results/MANIFEST.json, once each is "
         "checked: its commit is one of this repository, its checksum and its schema hold.",
@@ -208,13 +210,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: the manifest is written only with {MAINTAINER_FLAG}", file=sys.stderr)
         return 2
     try:
-        names = add(args.paths)
+        names = add(args.paths, model_of)
     except (ValueError, OSError) as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
     print(f"entered in {committed_results() / NAME}: {', '.join(names)}")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -11,13 +11,14 @@ checksum, ``sgb.manifest``), or that does not parse under its schema (``sgb.sche
 """
 
 from pathlib import Path
-from typing import Any
+from typing import NamedTuple
 
 from sgb import manifest, schemas
 from sgb.paths import committed_results
 from sgb.provenance import read_results, verify_checksum
+from sgb.schemas import ResultsFile
 
-Payload = dict[str, Any]  # a results file: {"results": ..., "provenance": ...}
+Payload = ResultsFile  # a results file as its record: .results, .provenance
 
 
 def path(name: str, results_dir: str | Path | None = None) -> Path:
@@ -26,13 +27,16 @@ def path(name: str, results_dir: str | Path | None = None) -> Path:
 
 
 def load(
-    name: str, results_dir: str | Path | None = None, missing_ok: bool = False
-) -> Payload | None:
-    """The payload of results file ``name``, once it is checked: strict JSON, matching the
-    checksum its run embedded (``sgb.provenance.verify_checksum``), its entry in the
-    manifest of ``results_dir`` (``sgb.manifest.verify``) and its schema
-    (``sgb.schemas.check``), else a ``CorruptFile`` naming it. ``None`` if it is absent and
-    ``missing_ok``, else ``FileNotFoundError`` naming it."""
+    name: str,
+    model: type[ResultsFile],
+    results_dir: str | Path | None = None,
+    missing_ok: bool = False,
+) -> ResultsFile | None:
+    """Results file ``name`` as a record of ``model``, once it is checked: strict JSON,
+    matching the checksum its run embedded (``sgb.provenance.verify_checksum``), its entry
+    in the manifest of ``results_dir`` (``sgb.manifest.verify``) and its model
+    (``sgb.schemas.check``), else a ``CorruptFile`` naming it. ``None`` if it is absent
+    and ``missing_ok``, else ``FileNotFoundError`` naming it."""
     root = Path(committed_results() if results_dir is None else results_dir)
     file = root / name
     if not file.exists():
@@ -42,52 +46,58 @@ def load(
     payload = read_results(file, schemas.REWRITE)
     verify_checksum(file, payload, schemas.REWRITE)
     manifest.verify(file, root)
-    schemas.check(name, payload, file)
-    return payload
+    return schemas.check(model, payload, file)
+
+
+class Source(NamedTuple):
+    """An experiment's results: part ("" for one file, else a body) -> file name, and the
+    model of its files."""
+
+    files: dict[str, str]
+    model: type[ResultsFile]
 
 
 class Records:
     """The results files of ``results_dir`` (default: the committed ones), each named by
-    its experiment (a key of the registry ``sgb.experiments.EXPERIMENTS``) and part (a
-    body, a dataset, or ``""`` for an experiment of one file), read once each through
-    ``load``. ``files`` maps experiment -> part -> file name, as the registry declares them.
+    its experiment (a key of ``sources``: the registry's ``sgb.experiments.EXPERIMENTS``
+    and the benchmarks) and part (a body, or ``""`` for an experiment of one file), read
+    once each through ``load`` as records of their model.
 
-        records("fig3", "ant")        # the payload, or FileNotFoundError naming the file
-        records.get("regime_peer")    # the payload, or None where it was never run
+        records("fig3", "ant")        # the record, or FileNotFoundError naming the file
+        records.get("regime_peer")    # the record, or None where it was never run
     """
 
-    def __init__(
-        self, files: dict[str, dict[str, str]], results_dir: str | Path | None = None
-    ) -> None:
-        self.files = files
+    def __init__(self, sources: dict[str, Source], results_dir: str | Path | None = None) -> None:
+        self.sources = sources
         self.results_dir = Path(committed_results() if results_dir is None else results_dir)
-        self._read: dict[str, Payload | None] = {}
+        self._read: dict[str, ResultsFile | None] = {}
 
     def name(self, experiment: str, part: str = "") -> str:
         """The file name of ``experiment``'s ``part``."""
-        parts = self.files.get(experiment, {})
-        if part not in parts:
+        files = self.sources[experiment].files if experiment in self.sources else {}
+        if part not in files:
             raise ValueError(
-                f"experiment {experiment!r} declares no results file {part!r}: {sorted(parts)}"
+                f"experiment {experiment!r} declares no results file {part!r}: {sorted(files)}"
             )
-        return parts[part]
+        return files[part]
 
-    def get(self, experiment: str, part: str = "") -> Payload | None:
-        """The payload of ``experiment``'s ``part``, or None if it is absent."""
+    def get(self, experiment: str, part: str = "") -> ResultsFile | None:
+        """The record of ``experiment``'s ``part``, or None if its file is absent."""
         name = self.name(experiment, part)
         if name not in self._read:
-            self._read[name] = load(name, self.results_dir, missing_ok=True)
+            model = self.sources[experiment].model
+            self._read[name] = load(name, model, self.results_dir, missing_ok=True)
         return self._read[name]
 
-    def __call__(self, experiment: str, part: str = "") -> Payload:
-        """The payload of ``experiment``'s ``part``; FileNotFoundError if it is absent."""
-        payload = self.get(experiment, part)
-        if payload is None:
+    def __call__(self, experiment: str, part: str = "") -> ResultsFile:
+        """The record of ``experiment``'s ``part``; FileNotFoundError if it is absent."""
+        record = self.get(experiment, part)
+        if record is None:
             file = self.results_dir / self.name(experiment, part)
             raise FileNotFoundError(
                 f"no results file {file}: run `python -m sgb reproduce {experiment}` for it"
             )
-        return payload
+        return record
 
 
 def _duration(seconds: float) -> str:

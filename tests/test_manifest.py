@@ -8,7 +8,7 @@ import threading
 
 import pytest
 
-from sgb import gather, manifest, provenance, results
+from sgb import gather, manifest, provenance
 from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.recording import earlier_results, write_results
@@ -82,7 +82,7 @@ def test_the_scorecard_names_a_committed_file_without_provenance_or_results(tmp_
 def test_a_directory_in_place_of_a_results_file_is_refused(tmp_path):
     (tmp_path / "rl" / "fig5_ant_cpu.json").mkdir(parents=True)
     with pytest.raises(CorruptFile, match=r"fig5_ant_cpu\.json is a directory"):
-        results.load("rl/fig5_ant_cpu.json", tmp_path)
+        gather.records(tmp_path)("fig5")
 
 
 def test_a_run_into_the_committed_results_enters_its_file_and_no_other(committed, tmp_path):
@@ -112,7 +112,7 @@ def test_a_committed_file_without_an_entry_or_without_a_manifest_is_refused(comm
     path = write_results(committed / "x_digits_cpu.json", {"acc": [0.5]}, RUN)
     copied = committed / "y_digits_cpu.json"
     shutil.copy(path, copied)
-    with pytest.raises(CorruptFile, match="has no entry in .*python -m sgb.manifest"):
+    with pytest.raises(CorruptFile, match="has no entry in .*python -m sgb manifest"):
         manifest.verify(copied)
     (committed / manifest.NAME).unlink()
     with pytest.raises(CorruptFile, match="MANIFEST.json is missing"):
@@ -148,12 +148,13 @@ def _theory() -> dict:
 def test_a_maintainer_enters_a_file_from_elsewhere_once_it_is_checked(committed, capsys):
     path = _arrived(committed)
     (committed / manifest.NAME).unlink()  # as a copy would arrive: not in the manifest
-    assert manifest.main([str(path)]) == 2
+    assert manifest.main([str(path)], gather.model_of) == 2
     assert "--maintainer-write-committed" in capsys.readouterr().err
     assert not (committed / manifest.NAME).exists()
-    assert manifest.main([str(path), "--maintainer-write-committed"]) == 0
+    assert manifest.main([str(path), "--maintainer-write-committed"], gather.model_of) == 0
     assert manifest.entries(committed) == {"theory_cpu.json": manifest.digest(path)}
-    assert results.load("theory_cpu.json", committed)["results"] == _theory()
+    theory = gather.records(committed)("theory")
+    assert theory.model_dump(exclude_unset=True)["results"] == _theory()
 
 
 @pytest.mark.parametrize(
@@ -174,7 +175,7 @@ def test_a_maintainer_cannot_enter_a_file_that_fails_a_check(committed, damage, 
         path.write_text(json.dumps(payload))
     (committed / manifest.NAME).unlink()
     with pytest.raises(CorruptFile, match=problem) as error:
-        manifest.add([path])
+        manifest.add([path], gather.model_of)
     assert error.value.path == path
     assert not (committed / manifest.NAME).exists()
 
@@ -186,4 +187,4 @@ def test_the_maintainer_command_takes_only_results_files_of_the_committed_result
     sidecar = write_results(committed / "rl" / "checkpoints" / "a_cpu.json", {"x": [1]}, RUN)
     for path in (outside, sidecar):
         with pytest.raises(ValueError, match="is not a results file of the committed results"):
-            manifest.add([path])
+            manifest.add([path], gather.model_of)

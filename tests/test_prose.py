@@ -8,13 +8,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sgb import book, chapters, claims, gather, prose, results
+from sgb import book, chapters, claims, gather, prose
 from sgb.experiments import fig2, fig3, fig4_5, regime_gait, regime_peer, sgb_full
 from sgb.experiments import populations as population_runs
 from sgb.experiments import regime as regime_runs
 from sgb.paths import committed_results
 
 BOOK = Path(__file__).resolve().parent.parent / "book"
+RECORDS = gather.records()  # the committed results, read by experiment
 
 
 def prose_names(chapter: str) -> set[str]:
@@ -61,7 +62,7 @@ def test_row_texts_read_the_scorecard_row(card):
 
 
 def test_missing_rows_and_files_give_the_fallback_texts():
-    sweeps = [results.load(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
+    sweeps = [RECORDS("fig3", env) for env in ("ant", "halfcheetah")]
     texts = fig3.figure3(*sweeps, card={})
     for name in ("level_ours", "fall_authors", "cheetah_fall_ours"):
         assert {texts[f"{name}_{part}"] for part in (*prose.ROW_PARTS, "power")} == {"not yet run"}
@@ -76,7 +77,7 @@ def test_missing_rows_and_files_give_the_fallback_texts():
 
 
 def test_the_texts_are_the_files_values():
-    regime = results.load("rl/regime_ant_cpu.json")
+    regime = RECORDS("regime")
     vanilla = [r for r in regime["results"]["runs"] if r["cell_types"] is None]
     texts = regime_runs.regime(regime)
     mean = np.mean([r["final_return"] for r in vanilla])
@@ -85,21 +86,19 @@ def test_the_texts_are_the_files_values():
     wall = np.mean([r["wall_time_s"] for r in vanilla])
     assert texts["regime_wall"] == f"{wall / 3600:.1f} h"
     assert texts["regime_steps"] == f"{int(vanilla[0]['eval_steps'][-1]):,}"  # all digits
-    bench = results.load("rl/bench_backends.json")["results"]["throughput"]
+    bench = RECORDS("bench_backends")["results"]["throughput"]
     ratio = bench["mjx"]["train_steps_per_s"] / bench["spring"]["train_steps_per_s"]
-    assert prose.backends(results.load("rl/bench_backends.json"))["mjx_vs_spring"] == (
-        f"{ratio:.2f}x"
-    )
-    fashion = results.load("fig2_fashion-mnist_cpu.json")["results"]
+    assert prose.backends(RECORDS("bench_backends"))["mjx_vs_spring"] == (f"{ratio:.2f}x")
+    fashion = RECORDS("fig2")["results"]
     dense = fashion["ours"]["summary"]["dense"]["mean"][0]
     assert fig2.figure2(fashion, {})["f2_dense"] == f"{100 * dense:.1f} %"
 
 
 def test_regime_without_sgb_arms_says_none():
-    regime = results.load("rl/regime_ant_cpu.json")
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
     summary = regime["results"]["summary"]
     regime["results"]["summary"] = [s for s in summary if s["cell_types"] is None]
-    assert regime_runs.regime(regime)["regime_sgb"] == "none"
+    assert regime_runs.regime(regime_runs.Regime.model_validate(regime))["regime_sgb"] == "none"
 
 
 def test_glue_all_glues_every_text(monkeypatch):
@@ -112,7 +111,7 @@ def test_glue_all_glues_every_text(monkeypatch):
 def test_the_variants_texts_say_a_known_shift_and_a_null_one():
     """Rewritten to known accuracies: the KL per type pair 5 points above the authors' at
     every ratio, our rho start level with them (the same values, the seeds' order turned)."""
-    full = results.load("sgb_full_fashion-mnist_cpu.json")
+    full = RECORDS("sgb_full").model_dump(exclude_unset=True)
     cells = [c for c in full["results"]["cells"].values() if c["variant"] == "authors"]
     rewritten = {}
     for i, cell in enumerate(cells):
@@ -129,7 +128,7 @@ def test_the_variants_texts_say_a_known_shift_and_a_null_one():
         )
         rewritten[f"rho_ours{i}"] = {**twin, "variant": "rho_ours"}
     full["results"]["cells"] = rewritten
-    texts = sgb_full.sgb_full(full)
+    texts = sgb_full.sgb_full(sgb_full.SgbFull.model_validate(full))
     assert texts["full_pair_shift"].startswith("+5.0 to +5.0 points over 7 ratios (7 of whose")
     assert texts["full_rho_shift"].startswith("+0.0 to +0.0 points over 7 ratios (0 of whose")
     assert texts["full_rho_mean_shift"].startswith("+0.0 to +0.0 points over 7 ratios")
@@ -139,19 +138,22 @@ def test_the_variants_texts_say_a_known_shift_and_a_null_one():
 def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
     """With seed 0 alone no row; with two seeds of vanilla and 128 types the level's text
     is its row's estimate and verdict, and the fall still has none."""
-    regime = results.load("rl/regime_ant_cpu.json")
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
     runs = regime["results"]["runs"]
     seed0 = {
         **regime,
         "results": {**regime["results"], "runs": [r for r in runs if r["seed"] == 0]},
     }
+    runs_of_seed0 = seed0["results"]["runs"]
+    seed0 = regime_runs.Regime.model_validate(seed0)
     assert regime_runs.regime(seed0)["regime_level"].startswith("no row yet")
     second = [
         {**r, "seed": 1, "final_return": r["final_return"] + 150.0}
         for r in runs
         if r["seed"] == 0 and r["cell_types"] in (None, 128)
     ]
-    both = {**regime, "results": {**regime["results"], "runs": seed0["results"]["runs"] + second}}
+    both = {**regime, "results": {**regime["results"], "runs": runs_of_seed0 + second}}
+    both = regime_runs.Regime.model_validate(both)
     steps = regime["provenance"]["config"]["ppo"]["total_steps"]
     (level,) = regime_runs.regime_rows(both["results"], steps)
     texts = regime_runs.regime(both)

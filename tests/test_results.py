@@ -6,7 +6,7 @@ import shutil
 
 import pytest
 
-from sgb import gather, manifest, results, schemas
+from sgb import gather, manifest, results
 from sgb.experiments import (
     dgb_budget,
     dgb_full,
@@ -23,18 +23,22 @@ from sgb.paths import committed_results
 from sgb.supervised_sweep import figure2_records
 from sgb.validation import CorruptFile
 
+RECORDS = gather.records()  # the committed results, read by experiment
+
 
 def raw(name: str) -> dict:
     """A committed results file as plain JSON, read without the package."""
     return json.loads((committed_results() / name).read_text())
 
 
-def test_load_reads_the_committed_file_and_names_a_missing_one(tmp_path):
-    assert results.load("rl/fig3_ant_cpu.json") == raw("rl/fig3_ant_cpu.json")
+def test_load_reads_the_committed_file_as_its_record_and_names_a_missing_one(tmp_path):
+    record = results.load("rl/fig3_ant_cpu.json", fig3_runs.Fig3)
+    assert isinstance(record.results.runs[0], fig3_runs.Fig3Run)
+    assert record.model_dump(exclude_unset=True) == raw("rl/fig3_ant_cpu.json")
     assert results.path("theory_cpu.json") == committed_results() / "theory_cpu.json"
-    assert results.load("absent.json", tmp_path, missing_ok=True) is None
+    assert results.load("absent.json", fig3_runs.Fig3, tmp_path, missing_ok=True) is None
     with pytest.raises(FileNotFoundError, match="absent.json"):
-        results.load("absent.json", tmp_path)
+        results.load("absent.json", fig3_runs.Fig3, tmp_path)
 
 
 def _committed_files() -> list[str]:
@@ -51,9 +55,9 @@ def test_every_committed_results_file_matches_the_manifest_and_its_schema():
     assert len(names) >= 20 and "rl/bench_rl.json" in names
     assert sorted(manifest.entries(committed_results())) == names
     for name in names:
-        assert results.load(name) == raw(name)
-    with pytest.raises(ValueError, match="no schemas in sgb.schemas cover"):
-        schemas.schema_of("rl/unknown_ant_cpu.json")
+        assert results.load(name, gather.model_of(name)).model_dump(exclude_unset=True) == raw(name)
+    with pytest.raises(ValueError, match="no experiment or benchmark declares"):
+        gather.model_of("rl/unknown_ant_cpu.json")
 
 
 def test_the_manifest_refuses_a_one_number_edit_of_a_committed_file(tmp_path):
@@ -108,8 +112,8 @@ def test_provenance_line_gives_the_wall_time_in_a_readable_unit(seconds, shown):
 
 def test_fig3_table_holds_every_scored_row_of_both_sweeps_unchanged():
     payloads = [raw(f"rl/fig3_{env}_cpu.json") for env in ("ant", "halfcheetah")]
-    table = fig3_runs.fig3_table(payloads)
-    expected = [(p["results"]["env"], row) for p in payloads for row in fig3_runs.fig3_summary(p)]
+    table = fig3_runs.fig3_table([RECORDS("fig3", env) for env in ("ant", "halfcheetah")])
+    expected = [(p["results"]["env"], row) for p in payloads for row in _scored(p)]
     assert len(table) == len(expected)
     for (_, got), (env, row) in zip(table.iterrows(), expected, strict=True):
         assert got["body"] == env and got["genome"] == fig3_runs.FIG3_GENOMES[row["settings"]]
@@ -118,20 +122,27 @@ def test_fig3_table_holds_every_scored_row_of_both_sweeps_unchanged():
         assert got["mean return"] == row["mean_return"] and got["seeds"] == row["n_seeds"]
 
 
+def _scored(payload: dict) -> list[dict]:
+    """A Figure 3 file's summary rows as the book scores them, read from its JSON."""
+    return payload["results"].get("summary_last_two", payload["results"]["summary"])
+
+
 def test_fig3_summary_prefers_the_last_two_score():
     ant = raw("rl/fig3_ant_cpu.json")
-    assert fig3_runs.fig3_summary(ant) == ant["results"]["summary_last_two"]
+    summary = fig3_runs.fig3_summary(fig3_runs.Fig3.model_validate(ant))
+    assert [row.model_dump() for row in summary] == ant["results"]["summary_last_two"]
     del ant["results"]["summary_last_two"]
-    assert fig3_runs.fig3_summary(ant) == ant["results"]["summary"]
+    summary = fig3_runs.fig3_summary(fig3_runs.Fig3.model_validate(ant))
+    assert [row.model_dump() for row in summary] == ant["results"]["summary"]
 
 
 def test_regime_and_spread_tables_are_the_runs_of_their_files():
     regime = raw("rl/regime_ant_cpu.json")
-    table = regime_runs.regime_table(regime)
+    table = regime_runs.regime_table(RECORDS("regime"))
     assert list(table.columns) == list(regime_runs.REGIME_COLUMNS.values())
     assert table["final return"].tolist() == [r["final_return"] for r in regime["results"]["runs"]]
     spread = raw("rl/spread_ant_cpu.json")
-    table = rl_spread.spread_table(spread)
+    table = rl_spread.spread_table(RECORDS("spread"))
     runs = spread["results"]["runs"]
     assert table["sigma trained"].tolist() == [r["sigma_trained"] for r in runs]
     assert table["paired t(99)"].tolist() == [r["paired_test"]["t"] for r in runs]
@@ -141,7 +152,7 @@ def test_innate_start_tables_name_every_start_with_no_list_cells():
     """One row per summary row; the fresh network named; the supervised curve's accuracy
     in % at each step, the Ant's returns as mean ± SEM text."""
     ant = raw("rl/innate_start_ant_cpu.json")
-    table = innate_start.innate_start_table(ant)
+    table = innate_start.innate_start_table(RECORDS("innate_start"))
     summary = ant["results"]["summary"]
     assert len(table) == len(summary)
     assert "none (fresh network)" in set(table["genome"])
@@ -150,7 +161,7 @@ def test_innate_start_tables_name_every_start_with_no_list_cells():
         f"{first['return_at_1']:.0f} ± {first['return_at_1_sem']:.0f}"
     )
     sup = raw("innate_start_supervised_fashion-mnist_cpu.json")
-    table = innate_start.innate_start_table(sup)
+    table = innate_start.innate_start_table(RECORDS("innate_start_supervised"))
     row = sup["results"]["summary"][0]
     last = row["steps"][-1]
     shown = table.loc[0, f"step {last} (% accuracy)"]
@@ -160,7 +171,7 @@ def test_innate_start_tables_name_every_start_with_no_list_cells():
 
 def test_mean_gap_table_shows_each_cell_in_percent():
     gap = raw("mean_gap_fashion-mnist_cpu.json")["results"]
-    table = mean_gap.mean_gap_table(gap)
+    table = mean_gap.mean_gap_table(RECORDS("mean_gap").results)
     assert len(table) == len(gap["summary"])
     first = gap["summary"][0]
     assert table.loc[0, "gap (points)"] == (
@@ -171,7 +182,7 @@ def test_mean_gap_table_shows_each_cell_in_percent():
 
 def test_fig45_statistics_are_the_files_tests():
     fig4, fig5 = raw("rl/fig4_ant_cpu.json"), raw("rl/fig5_ant_cpu.json")
-    table = fig4_5.fig45_statistics(fig4, fig5).set_index("test")
+    table = fig4_5.fig45_statistics(RECORDS("fig4"), RECORDS("fig5")).set_index("test")
     legs = table.loc["Pearson r, normal body vs long legs"]
     assert legs["statistic"] == fig4["results"]["legs"]["r"]
     assert table.loc["Pearson r, slippery vs low gravity", "p"] == fig4["results"]["niches"]["p"]
@@ -184,7 +195,7 @@ def test_fig45_statistics_are_the_files_tests():
 
 def test_figure2_table_gives_each_setting_both_compressions_and_its_accuracy():
     fig2 = raw("fig2_fashion-mnist_cpu.json")["results"]
-    table = fig2_runs.figure2_table(fig2)
+    table = fig2_runs.figure2_table(RECORDS("fig2").results)
     for model in ("dense", "sgb", "dgb"):
         ours, theirs = fig2["ours"]["summary"][model], fig2["authors"]["summary"][model]
         rows = table[table["model"] == model]
@@ -199,7 +210,7 @@ def test_figure2_table_gives_each_setting_both_compressions_and_its_accuracy():
 
 def test_dgb_budget_table_has_one_row_per_record():
     budget = raw("dgb_budget_fashion-mnist_cpu.json")["results"]
-    table = dgb_budget.dgb_budget_table(budget)
+    table = dgb_budget.dgb_budget_table(RECORDS("dgb_budget").results)
     assert table["rounds"].tolist() == [r["rounds"] for r in budget["records"]]
     assert table["its test %"].tolist() == pytest.approx(
         [100 * r["test_accuracy"] for r in budget["records"]]
@@ -210,7 +221,7 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
     """Every cell is a row of the table; the finished ones (all the configured rounds) are
     Figure 2 records, with the table's accuracy, compression and nominal ratio."""
     payload = raw("dgb_full_fashion-mnist_cpu.json")
-    table = dgb_full.dgb_full_table(payload)
+    table = dgb_full.dgb_full_table(RECORDS("dgb_full"))
     assert len(table) == len(payload["results"]["cells"])
     rounds = payload["provenance"]["config"]["dgb"]["rounds"]
     finished = table[table["rounds"] == rounds].set_index(["target ratio", "seed"])
@@ -225,7 +236,7 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
 
 def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():
     payload = raw("sgb_full_fashion-mnist_cpu.json")
-    table = sgb_full.sgb_full_table(payload)
+    table = sgb_full.sgb_full_table(RECORDS("sgb_full"))
     cells = list(payload["results"]["cells"].values())
     assert table["seeds"].sum() == len(cells)
     for _, row in table.iterrows():
@@ -242,9 +253,8 @@ def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():
 def test_fig3_seeds_average_to_the_summary_of_their_sweep():
     """Each setting's seeds, as fractions of vanilla, have the summary's fraction as mean."""
     for env in ("ant", "halfcheetah"):
-        payload = raw(f"rl/fig3_{env}_cpu.json")
-        seeds = fig3_runs.fig3_seeds(payload)
-        for row in fig3_runs.fig3_summary(payload):
+        seeds = fig3_runs.fig3_seeds(RECORDS("fig3", env))
+        for row in _scored(raw(f"rl/fig3_{env}_cpu.json")):
             if row["cell_types"] is None:
                 continue
             mine = [

@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from sgb import schemas
+from sgb import gather, schemas
 from sgb.paths import committed_results
 from sgb.validation import CorruptFile
 
@@ -80,10 +80,10 @@ def test_a_file_damaged_in_one_field_is_refused_naming_the_file_and_the_field(
     name, change, problem
 ):
     payload = _payload(name)
-    schemas.check(name, payload, "unchanged")
+    schemas.check(gather.model_of(name), payload, "unchanged")
     change(payload)
     with pytest.raises(CorruptFile, match=problem) as error:
-        schemas.check(name, payload, committed_results() / name)
+        schemas.check(gather.model_of(name), payload, committed_results() / name)
     assert error.value.path == committed_results() / name
     assert str(error.value).startswith(f"results file {committed_results() / name} has ")
 
@@ -104,7 +104,7 @@ def test_a_file_damaged_in_one_field_is_refused_naming_the_file_and_the_field(
 def test_the_nulls_and_absences_a_reader_expects_are_accepted(name, change):
     payload = _payload(name)
     change(payload)
-    schemas.check(name, payload, committed_results() / name)
+    schemas.check(gather.model_of(name), payload, committed_results() / name)
 
 
 def test_a_return_is_bounded_by_the_longest_episode_at_a_speed_no_body_reaches():

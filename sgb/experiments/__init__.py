@@ -40,6 +40,7 @@ class Experiment:
     shares_runs: bool = False  # its runs take locks, so several workers can share it
     # part ("" for one file, else a body) -> the committed results file the book reads
     results: dict[str, str] = field(default_factory=dict)
+    record_name: str = ""  # the model of its results files (a pydantic class in its module)
     evidence_name: str = "evidence"  # its scorecard rows: evidence(records) -> list[Row]
 
     def _module(self):
@@ -54,6 +55,11 @@ class Experiment:
     def profiles(self) -> dict[str, Any]:
         """Profile name -> the config ``run`` uses at that profile."""
         return getattr(self._module(), self.profiles_name)
+
+    @property
+    def record(self) -> type | None:
+        """The model of its results files (``sgb.schemas.ResultsFile``), or None."""
+        return getattr(self._module(), self.record_name) if self.record_name else None
 
     @property
     def evidence(self) -> Callable[..., list] | None:
@@ -97,6 +103,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "not measured (10,000 noise draws per gap, an 81 x 50 start grid)",
         },
         results={"": "theory_cpu.json"},
+        record_name="Theory",
     ),
     "fig2": Experiment(
         "fig2",
@@ -111,6 +118,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "not measured (50 epochs, 5 seeds; cifar10 200 epochs); needs a GPU",
         },
         results={"": "fig2_fashion-mnist_cpu.json"},
+        record_name="Fig2",
     ),
     "dgb_budget": Experiment(
         "dgb_budget",
@@ -124,6 +132,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu run (the same config)",
         },
         results={"": "dgb_budget_fashion-mnist_cpu.json"},
+        record_name="DgbBudget",
     ),
     "dgb_full": Experiment(
         "dgb_full",
@@ -139,6 +148,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
         results={"": "dgb_full_fashion-mnist_cpu.json"},
+        record_name="DgbFull",
     ),
     "sgb_full": Experiment(
         "sgb_full",
@@ -155,6 +165,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
         results={"": "sgb_full_fashion-mnist_cpu.json"},
+        record_name="SgbFull",
     ),
     "fig3": Experiment(
         "fig3",
@@ -172,6 +183,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
         results={"ant": "rl/fig3_ant_cpu.json", "halfcheetah": "rl/fig3_halfcheetah_cpu.json"},
+        record_name="Fig3",
     ),
     "fig4": Experiment(
         "fig4_5",
@@ -188,6 +200,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         results={"": "rl/fig4_ant_cpu.json"},
         evidence_name="fig4_evidence",
+        record_name="Fig4",
     ),
     "fig5": Experiment(
         "fig4_5",
@@ -203,6 +216,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         results={"": "rl/fig5_ant_cpu.json"},
         evidence_name="fig5_evidence",
+        record_name="Fig5",
     ),
     "bet_hedging": Experiment(
         "bet_hedging",
@@ -220,6 +234,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "measured",
         },
         results={"": "rl/bet_hedging_ant_cpu.json"},
+        record_name="BetHedging",
     ),
     "evolution": Experiment(
         "evolution",
@@ -233,6 +248,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "Fashion-MNIST, 64 hidden neurons, 10,000 generations; not measured",
         },
         results={"": "evolution_digits_cpu.json"},
+        record_name="Evolution",
     ),
     "innate_start": Experiment(
         "innate_start",
@@ -252,6 +268,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "and a GPU",
         },
         results={"": "rl/innate_start_ant_cpu.json"},
+        record_name="InnateStart",
     ),
     "innate_start_supervised": Experiment(
         "innate_start_supervised",
@@ -266,6 +283,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu design on Fig. 2's paper SGB (50 epochs), 5 seeds; not measured",
         },
         results={"": "innate_start_supervised_fashion-mnist_cpu.json"},
+        record_name="InnateStartSupervised",
     ),
     "mean_gap": Experiment(
         "mean_gap",
@@ -280,6 +298,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu cells at the paper's 50 epochs, not measured",
         },
         results={"": "mean_gap_fashion-mnist_cpu.json"},
+        record_name="MeanGap",
     ),
     "regime": Experiment(
         "regime",
@@ -296,6 +315,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
         results={"": "rl/regime_ant_cpu.json"},
+        record_name="Regime",
     ),
     "regime_peer": Experiment(
         "regime_peer",
@@ -311,6 +331,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         shares_runs=True,
         results={"": "rl/regime_peer_ant_cpu.json"},
+        record_name="RegimePeer",
     ),
     "regime_gait": Experiment(
         "regime_gait",
@@ -325,6 +346,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "the cpu runs; not measured on a GPU",
         },
         results={"": "rl/regime_gait_ant_cpu.json"},
+        record_name="RegimeGait",
     ),
     "populations": Experiment(
         "populations",
@@ -339,6 +361,7 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "not measured; needs fig3's paper checkpoints and a GPU",
         },
         results={"": "rl/populations_ant_cpu.json"},
+        record_name="Populations",
     ),
     "regime_populations": Experiment(
         "populations",
@@ -358,6 +381,7 @@ EXPERIMENTS: dict[str, Experiment] = {
         },
         results={"": "rl/regime_populations_ant_cpu.json"},
         evidence_name="regime_evidence",
+        record_name="RegimePopulations",
     ),
     "spread": Experiment(
         "rl_spread",
@@ -371,13 +395,15 @@ EXPERIMENTS: dict[str, Experiment] = {
             "paper": "15 runs of 50M steps, not measured; needs a GPU",
         },
         results={"": "rl/spread_ant_cpu.json"},
+        record_name="Spread",
     ),
 }
 
 
-def results_files() -> dict[str, dict[str, str]]:
-    """Experiment -> part -> the committed results file the book reads of it."""
-    return {name: e.results for name, e in EXPERIMENTS.items() if e.results}
+def results_files() -> dict[str, tuple[dict[str, str], type]]:
+    """Experiment -> (part -> the committed results file the book reads of it, the model
+    of its files)."""
+    return {name: (e.results, e.record) for name, e in EXPERIMENTS.items() if e.results}
 
 
 def get_experiment(name: str) -> Experiment:

@@ -43,6 +43,18 @@ from sgb.rl.envs import VARIANTS
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.runs import checkpoint_name, checkpoint_root
+from sgb.schemas import (
+    Each,
+    Finite,
+    List,
+    NonNegative,
+    Probability,
+    Record,
+    ResultsFile,
+    Return,
+    Returns,
+    Seed,
+)
 
 POPULATIONS = ("individuals", "clones")
 QS = (0.25, 0.5, 0.75)  # survival thresholds, shares of the mean network's normal return
@@ -275,24 +287,62 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return bet_hedging(records.get("bet_hedging"))
 
 
-def hedging_table(payload: Payload, q: str = "0.5") -> pd.DataFrame:
+def hedging_table(payload: "BetHedging", q: str = "0.5") -> pd.DataFrame:
     """Bet-hedging (``sgb.experiments.bet_hedging``), one row per genome and population:
     the trained sigma, the fitness scale (the mean network's mean return at home), the
     geometric and arithmetic mean fitness, and P(at least k survive) at threshold ``q``
     for every k."""
     rows = []
-    for g in payload["results"]["genomes"]:
-        for population, score in g["scores"].items():
+    for g in payload.results.genomes:
+        for population, score in (
+            ("individuals", g.scores.individuals),
+            ("clones", g.scores.clones),
+        ):
             rows.append(
                 {
-                    "rho start": g["rho_init"],
-                    "seed": g["training_seed"],
-                    "sigma trained": g["sigma_trained"],
+                    "rho start": g.rho_init,
+                    "seed": g.training_seed,
+                    "sigma trained": g.sigma_trained,
                     "population": population,
-                    "home return": g["scale"],
-                    "geometric fitness": score["geometric_fitness"],
-                    "mean fitness": score["mean_fitness"],
-                    **{f"P(>= {k} survive)": p for k, p in score["p_at_least"][q].items()},
+                    "home return": g.scale,
+                    "geometric fitness": score.geometric_fitness,
+                    "mean fitness": score.mean_fitness,
+                    **{f"P(>= {k} survive)": p for k, p in score.p_at_least[q].items()},
                 }
             )
     return pd.DataFrame(rows)
+
+
+class HedgingScore(Record):
+    """The survival the scorecard reads: threshold 0.5, at least 10 members."""
+
+    geometric_fitness: Finite
+    mean_fitness: Finite
+    p_at_least: Each(Each(Probability, "10"), "0.5")
+
+
+class HedgingReturns(Record):
+    individuals: Each(Returns, "normal")
+    clones: Each(Returns, "normal")
+
+
+class HedgingScores(Record):
+    individuals: HedgingScore
+    clones: HedgingScore
+
+
+class HedgingGenome(Record):
+    rho_init: Finite
+    training_seed: Seed
+    sigma_trained: NonNegative
+    scale: Return
+    returns: HedgingReturns
+    scores: HedgingScores
+
+
+class BetHedgingResults(Record):
+    genomes: List[HedgingGenome]
+
+
+class BetHedging(ResultsFile):
+    results: BetHedgingResults

@@ -29,6 +29,7 @@ from sgb.prose import Card, percent
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
+from sgb.schemas import Accuracy, Count, DgbRecord, List, Record, ResultsFile
 from sgb.supervised import DenseConfig, train_and_evaluate
 
 PROFILES: dict[str, BudgetConfig] = {
@@ -153,3 +154,17 @@ def dgb_budget_table(results: dict) -> pd.DataFrame:
         }
         for r in results["records"]
     )
+
+
+class SameBudget(Record):
+    epochs: Count
+    accuracy: Accuracy
+
+
+class DgbBudgetResults(Record):
+    records: List[DgbRecord]
+    uncompressed_same_budget: SameBudget
+
+
+class DgbBudget(ResultsFile):
+    results: DgbBudgetResults

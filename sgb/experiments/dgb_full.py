@@ -28,6 +28,19 @@ from sgb.dgb import DGBConfig
 from sgb.profiles import PROFILE_NAMES
 from sgb.recording import Recording, start
 from sgb.results import Payload
+from sgb.schemas import (
+    Compression,
+    Count,
+    DgbRecord,
+    Each,
+    List,
+    MaybeEmpty,
+    NonNegative,
+    Provenance,
+    Record,
+    ResultsFile,
+    Seed,
+)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -163,3 +176,36 @@ def dgb_full_table(payload: Payload) -> pd.DataFrame:
         }
         for c in payload["results"]["cells"].values()
     ).sort_values(["target ratio", "seed"], ignore_index=True)
+
+
+class DgbFullCell(Record):
+    ratio: Compression
+    seed: Seed
+    gnet_width: Count
+    compression_ours: Compression
+    compression_authors: Compression
+    nominal_ratio: NonNegative
+    records: MaybeEmpty[DgbRecord]
+
+
+class DgbFullResults(Record):
+    cells: Each(DgbFullCell)
+
+
+class Rounds(Record):
+    rounds: Count
+
+
+class DgbFullConfig(Record):
+    ratios: List[Compression]
+    seeds: List[Seed]
+    dgb: Rounds
+
+
+class DgbFullProvenance(Provenance):
+    config: DgbFullConfig
+
+
+class DgbFull(ResultsFile):
+    provenance: DgbFullProvenance
+    results: DgbFullResults

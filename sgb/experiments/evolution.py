@@ -35,6 +35,18 @@ from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Payload, Records
+from sgb.schemas import (
+    Accuracy,
+    Compression,
+    Count,
+    List,
+    NonNegative,
+    Provenance,
+    Record,
+    ResultsFile,
+    Seconds,
+    Seed,
+)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -237,3 +249,37 @@ def evolution_table(payload: Payload) -> pd.DataFrame:
         }
         for r in payload["results"]["records"]
     )
+
+
+class EvolutionRecord(Record):
+    hidden_types: Count
+    stochastic: bool
+    seed: Seed
+    compression: Compression
+    mean_fitness: List[Accuracy]
+    individuals: List[Accuracy]
+    mean_network: Accuracy
+    sigma_mean: NonNegative
+    wall_time_s: Seconds
+
+
+class EvolutionResults(Record):
+    dataset: str
+    records: List[EvolutionRecord]
+
+
+class Candidates(Record):
+    candidates: Count
+
+
+class SweepConfig(Record):
+    base: Candidates
+
+
+class EvolutionProvenance(Provenance):
+    config: SweepConfig
+
+
+class Evolution(ResultsFile):
+    provenance: EvolutionProvenance
+    results: EvolutionResults

@@ -33,6 +33,18 @@ from sgb.data import load
 from sgb.prose import Card, percent, row_of, row_texts
 from sgb.recording import Recording, start
 from sgb.results import Records
+from sgb.schemas import (
+    Accuracy,
+    Compression,
+    Count,
+    Finite,
+    List,
+    MaybeEmpty,
+    NonNegative,
+    Record,
+    ResultsFile,
+    Seed,
+)
 from sgb.supervised_sweep import SWEEPS, run_one, sweep_cells, sweep_summary
 
 # the registry reads an experiment's profiles here: profile -> dataset -> sweep and ablation
@@ -239,3 +251,47 @@ def figure2_table(results: dict) -> pd.DataFrame:
                 }
             )
     return pd.DataFrame(rows)
+
+
+class Curve(Record):
+    """One model's accuracy per setting, over seeds."""
+
+    setting: List[Finite]
+    compression: List[Compression]
+    mean: List[Accuracy]
+    sem: List[NonNegative | None]
+    n: List[Count]
+
+
+class Fig2Summary(Record):
+    dense: Curve
+    sgb: Curve
+    dgb: Curve
+
+
+class SgbCurve(Record):
+    sgb: Curve
+
+
+class Convention(Record):
+    summary: Fig2Summary
+    summary_mean_network: SgbCurve
+    crossovers: MaybeEmpty[Compression]
+
+
+class Fig2Record(Record):
+    model: str
+    setting: Finite
+    seed: Seed
+    accuracy: Accuracy
+    compression: Compression
+
+
+class Fig2Results(Record):
+    records: List[Fig2Record]
+    ours: Convention
+    authors: Convention
+
+
+class Fig2(ResultsFile):
+    results: Fig2Results

@@ -24,6 +24,17 @@ from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_scale, with_settings
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, finished_run, seed_sem, train_runs
 from sgb.rl.sweep import BACKENDS, CellTypeSweep, sweep_config
+from sgb.schemas import (
+    Count,
+    Finite,
+    List,
+    NonNegative,
+    Provenance,
+    Record,
+    ResultsFile,
+    Return,
+    Training,
+)
 
 
 def sweep_runs(config: CellTypeSweep) -> list[tuple[str, int | None, int]]:
@@ -296,9 +307,48 @@ def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
     ``FIG3_COLUMNS`` maps the files' keys."""
     tables = []
     for payload in payloads:
-        table = pd.DataFrame(fig3_summary(payload)).assign(env=payload["results"]["env"])
+        summary = [row.model_dump() for row in fig3_summary(payload)]
+        table = pd.DataFrame(summary).assign(env=payload.results.env)
         tables.append(table)
     table = pd.concat(tables, ignore_index=True)
     table["cell_types"] = ["vanilla" if pd.isna(k) else f"{k:.0f}" for k in table["cell_types"]]
     table["settings"] = [FIG3_GENOMES.get(s, s) for s in table["settings"]]
     return table[list(FIG3_COLUMNS)].rename(columns=FIG3_COLUMNS)
+
+
+class Fig3Summary(Record):
+    settings: str
+    cell_types: Count | None
+    mean_return: Return
+    sem_return: NonNegative | None
+    fraction: Finite | None
+    sem_fraction: NonNegative | None
+    n_seeds: Count
+
+
+class Fig3Run(Training):
+    settings: str
+
+
+class Fig3Results(Record):
+    env: str
+    runs: List[Fig3Run]
+    summary: List[Fig3Summary]
+    summary_last_two: List[Fig3Summary] = None
+
+
+class TotalSteps(Record):
+    total_steps: Count
+
+
+class PpoConfig(Record):
+    ppo: TotalSteps
+
+
+class PpoProvenance(Provenance):
+    config: PpoConfig
+
+
+class Fig3(ResultsFile):
+    provenance: PpoProvenance
+    results: Fig3Results

@@ -20,7 +20,7 @@ from sgb.profiles import PROFILE_NAMES
 from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.recording import start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.protocols import (
     PopulationConfig,
     authors_protocol,
@@ -31,6 +31,17 @@ from sgb.rl.protocols import (
     population_on,
 )
 from sgb.rl.runs import checkpoint_root
+from sgb.schemas import (
+    Correlation,
+    Finite,
+    List,
+    Probability,
+    Provenance,
+    Record,
+    ResultsFile,
+    Return,
+    Returns,
+)
 
 
 def evaluate_conditions(config: PopulationConfig, results_dir: Path) -> dict:
@@ -200,26 +211,105 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return figures4_5(card) | variability(card)
 
 
-def fig45_statistics(fig4: Payload, fig5: Payload) -> pd.DataFrame:
+def fig45_statistics(fig4: "Fig4", fig5: "Fig5") -> pd.DataFrame:
     """Figures 4E/F and 5 in numbers, one row per test: Pearson r between bodies and
     between niches; our paired t and the authors' one-sample t, with the mean returns of
     the individuals and of the mean network (the centres of their 99 % intervals)."""
-    legs, niches = fig4["results"]["legs"], fig4["results"]["niches"]
-    paired, authors = fig5["results"]["mean_network"], fig5["results"]["authors_protocol"]
-    rows = [
-        {"figure": "4E", "test": "Pearson r, normal body vs long legs", **legs},
-        {"figure": "4F", "test": "Pearson r, slippery vs low gravity", **niches},
-        {"figure": "5", "test": "paired t (our protocol)", **paired},
-        {"figure": "5", "test": "one-sample t (the authors' protocol)", **authors},
-    ]
-    return pd.DataFrame(
-        {
-            "figure": row["figure"],
-            "test": row["test"],
-            "statistic": row["r"] if "r" in row else row["t"],
-            "p": row["p"],
-            "individuals' mean return": row.get("individuals_ci99", [math.nan])[0],
-            "mean network's return": row.get("mean_network_ci99", [math.nan])[0],
-        }
-        for row in rows
+    correlations = (
+        ("4E", "Pearson r, normal body vs long legs", fig4.results.legs),
+        ("4F", "Pearson r, slippery vs low gravity", fig4.results.niches),
     )
+    t_tests = (
+        ("5", "paired t (our protocol)", fig5.results.mean_network),
+        ("5", "one-sample t (the authors' protocol)", fig5.results.authors_protocol),
+    )
+    rows = [
+        {"figure": figure, "test": test, "statistic": r.r, "p": r.p}
+        for figure, test, r in correlations
+    ] + [
+        {
+            "figure": figure,
+            "test": test,
+            "statistic": t.t,
+            "p": t.p,
+            "individuals' mean return": t.individuals_ci99[0],
+            "mean network's return": t.mean_network_ci99[0],
+        }
+        for figure, test, t in t_tests
+    ]
+    columns = [
+        "figure",
+        "test",
+        "statistic",
+        "p",
+        "individuals' mean return",
+        "mean network's return",
+    ]
+    return pd.DataFrame(rows, columns=columns)
+
+
+class Individuals(Record):
+    individuals: Returns
+
+
+class Fig4Returns(Record):
+    normal: Individuals
+    long_legs: Individuals
+    slippery: Individuals
+    low_gravity: Individuals
+
+
+class CorrelationTest(Record):
+    r: Correlation
+    p: Probability
+
+
+class Fig4Results(Record):
+    returns: Fig4Returns
+    legs: CorrelationTest
+    niches: CorrelationTest
+
+
+class CheckpointConfig(Record):
+    checkpoint: str
+
+
+class Fig4Provenance(Provenance):
+    config: CheckpointConfig
+
+
+class Fig4(ResultsFile):
+    provenance: Fig4Provenance
+    results: Fig4Results
+
+
+class Fig5Test(Record):
+    """A test of the individuals against the mean network; ci99: mean, low, high."""
+
+    t: Finite
+    p: Probability
+    individuals_ci99: List[Return]
+    mean_network_ci99: List[Return]
+
+
+class AuthorsProtocol(Fig5Test):
+    individuals: Returns
+    mean_network: List[Return]
+
+
+class WithMeanNetwork(Individuals):
+    mean_network: Returns
+
+
+class NormalBody(Record):
+    normal: WithMeanNetwork
+
+
+class Fig5Results(Record):
+    returns: NormalBody
+    mean_network: Fig5Test
+    authors_protocol: AuthorsProtocol
+
+
+class Fig5(ResultsFile):
+    results: Fig5Results

@@ -63,6 +63,7 @@ import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -83,6 +84,7 @@ from sgb.rl.protocols import load_agent
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, checkpoint_root
 from sgb.rl.sweep import sweep_config
 from sgb.rl.trainer import make_trainer
+from sgb.schemas import List, Record, ResultsFile, Return, Seed, Steps
 from sgb.stats import sem
 
 STARTS = ("mean", "best", "random", "fresh")
@@ -489,3 +491,27 @@ def innate_start_table(payload: Payload) -> pd.DataFrame:
             )
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+class Selection(Record):
+    individual_means: List[Return]
+
+
+class InnateRun(Record):
+    genome: str | None
+    start: str
+    seed: Seed
+    auc: Return
+    eval_steps: List[Steps]
+    eval_returns: List[Return]
+
+
+class InnateStartResults(Record):
+    complete: bool
+    selections: List[Selection]
+    runs: List[InnateRun]
+    summary: List[dict[str, Any]]
+
+
+class InnateStart(ResultsFile):
+    results: InnateStartResults

@@ -46,6 +46,7 @@ from sgb.individuals import individual_kernels
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
+from sgb.schemas import Accuracy, Count, List, MaybeEmpty, NonNegative, Record, ResultsFile, Steps
 from sgb.stats import sem
 from sgb.supervised import dense_accuracy, train_and_evaluate
 from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
@@ -265,3 +266,28 @@ def evidence(records: Records) -> list[Row]:
     """Fine-tuning from an innate start on Fashion-MNIST (``innate_supervised_rows``)."""
     payload = records.get("innate_start_supervised")
     return [] if payload is None else innate_supervised_rows(payload["results"])
+
+
+class CurveOverSteps(Record):
+    start: str
+    steps: List[Steps]
+    accuracy: List[Accuracy]
+
+
+class CurveRuns(Record):
+    runs: List[CurveOverSteps]
+
+
+class CurveSummary(CurveOverSteps):
+    accuracy_sem: List[NonNegative | None]
+    n_seeds: Count
+
+
+class InnateStartSupervisedResults(Record):
+    dataset: str
+    records: MaybeEmpty[CurveRuns]
+    summary: List[CurveSummary]
+
+
+class InnateStartSupervised(ResultsFile):
+    results: InnateStartSupervisedResults

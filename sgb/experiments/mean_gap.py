@@ -45,6 +45,7 @@ from sgb.prose import Card, mean_sem
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
+from sgb.schemas import Accuracy, Count, Finite, List, NonNegative, Record, ResultsFile, Seed
 from sgb.stats import sem
 from sgb.supervised import make_model, train_and_evaluate
 from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
@@ -312,3 +313,44 @@ def mean_gap_table(results: dict) -> pd.DataFrame:
         }
         for s in results["summary"]
     )
+
+
+class MeanRho(Record):
+    mean_rho: Finite
+
+
+class GapLayer(Record):
+    rho_travel_fraction: Finite
+    end: MeanRho
+
+
+class MeanGapRecord(Record):
+    setting: Count
+    seed: Seed
+    rho_init: Finite
+    steps: Count
+    layers: List[GapLayer]
+
+
+class MeanGapSummary(Record):
+    """Per setting: the individuals' accuracy and the two networks', each with its SEM."""
+
+    setting: Count
+    rho_init: Finite
+    moment_recovery: Finite
+    sigma_end: NonNegative
+    accuracy: Accuracy
+    mean_network: Accuracy
+    moment_network: Accuracy
+    accuracy_sem: NonNegative
+    mean_network_sem: NonNegative
+    moment_network_sem: NonNegative
+
+
+class MeanGapResults(Record):
+    records: List[MeanGapRecord]
+    summary: List[MeanGapSummary]
+
+
+class MeanGap(ResultsFile):
+    results: MeanGapResults

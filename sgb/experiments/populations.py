@@ -78,6 +78,22 @@ from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
 from sgb.rl.runs import checkpoint_name, checkpoint_root
+from sgb.schemas import (
+    Correlation,
+    Count,
+    Each,
+    Finite,
+    List,
+    NonNegative,
+    Positive,
+    Record,
+    Reliability,
+    ResultsFile,
+    Return,
+    Returns,
+    Seed,
+    StoredTest,
+)
 
 BODIES = ("normal", "long_legs")
 PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body
@@ -646,3 +662,130 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return regime_populations(records.get("regime_populations")) | populations(
         records.get("populations")
     )
+
+
+class VarianceSplit(Record):
+    reliability: Reliability
+    icc: Reliability
+
+
+class Split(Record):
+    variance_split: VarianceSplit
+
+
+class NormalSplit(Split):
+    between_sd_bound_percent: NonNegative = None
+
+
+class PopulationNormal(NormalSplit):
+    mean_return: Return
+
+
+class MeanNetworkPercent(Record):
+    percent: Finite
+    percent_ci: List[Finite]
+
+
+class PopulationSummary(Record):
+    normal: PopulationNormal
+    long_legs: Split
+    mean_network: MeanNetworkPercent
+
+
+class ReturnsPart(Record):
+    returns: Returns
+
+
+class NormalPart(Record):
+    normal: ReturnsPart
+
+
+class PopulationGenome(Record):
+    settings: str
+    parts: NormalPart
+    summary: PopulationSummary = None
+
+
+class Pooled(Record):
+    random_effects: Finite
+    random_effects_ci: List[Finite]
+    random_effects_se: Positive
+
+
+class PooledR(Record):
+    """Pooled on Fisher's z."""
+
+    random_effects: Correlation
+    random_effects_ci: List[Correlation]
+    random_effects_z_se: Positive
+
+
+class FixedEffect(Record):
+    fixed_effect: Pooled
+
+
+class FixedEffectR(Record):
+    fixed_effect: PooledR
+
+
+class PooledSetting(Record):
+    mean_network_percent: FixedEffect
+    legs_r: FixedEffectR
+
+
+class PopulationsResults(Record):
+    genomes: Each(PopulationGenome)
+    pooled: Each(PooledSetting)
+
+
+class Populations(ResultsFile):
+    results: PopulationsResults
+
+
+class OurProtocol(Record):
+    mean_network_return: Return
+    test: StoredTest
+
+
+class TheirProtocol(Record):
+    individual_episodes: Count
+    mean_network_episodes: Count
+    mean_network_mean: Return
+    one_sample: StoredTest
+    welch: StoredTest
+
+
+class SplitHalf(Record):
+    episodes: Count
+    r: Correlation
+    r_ci: List[Correlation]
+
+
+class RegimeNormal(NormalSplit):
+    split_half: SplitHalf
+
+
+class LegsTest(Record):
+    test: StoredTest
+
+
+class RegimePopulationSummary(Record):
+    mean_network: OurProtocol
+    authors_protocol: TheirProtocol = None
+    normal: RegimeNormal
+    long_legs: Split
+    legs: LegsTest
+
+
+class RegimePopulationGenome(Record):
+    training_seed: Seed
+    parts: NormalPart
+    summary: RegimePopulationSummary = None
+
+
+class RegimePopulationsResults(Record):
+    genomes: Each(RegimePopulationGenome)
+
+
+class RegimePopulations(ResultsFile):
+    results: RegimePopulationsResults

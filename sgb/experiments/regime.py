@@ -42,6 +42,7 @@ from sgb.results import Payload, Records
 from sgb.rl.regime_runs import RUNS, run_config, train_regime
 from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
+from sgb.schemas import Finite, List, Positive, Record, ResultsFile, Seconds, Training
 
 
 def run(profile: str, out_dir: Path) -> Path:
@@ -130,7 +131,7 @@ def regime_rows(results: dict, steps: int) -> list[Row]:
     (the authors' window on all 2,048 training environments); per genome (their Gaussian
     per pair, and their aliased pairs). A row appears once the two arms it compares have
     two seeds each."""
-    runs = [{**r, "settings": r.get("genome", "authors")} for r in results["runs"]]
+    runs = [{**dict(r), "settings": r.get("genome", "authors")} for r in results["runs"]]
     return figure3_rows(
         {"runs": runs}, "ant", steps, "final_return", REGIME_SETTINGS, key_infix="regime."
     )
@@ -208,5 +209,20 @@ def regime_table(payload: Payload) -> pd.DataFrame:
     """The authors' regime (``sgb.experiments.regime``), one row per run: final and
     last-two evaluation returns, the final one on the authors' Figure 3 scale, training
     env-steps/s and wall time; columns named as ``REGIME_COLUMNS`` maps the files' keys."""
-    runs = pd.DataFrame(payload["results"]["runs"])[list(REGIME_COLUMNS)]
+    runs = pd.DataFrame([r.model_dump() for r in payload.results.runs])[list(REGIME_COLUMNS)]
     return runs.rename(columns=REGIME_COLUMNS)
+
+
+class RegimeRun(Training):
+    authors_scale: Finite
+    train_steps_per_s: Positive
+    wall_time_s: Seconds
+
+
+class RegimeResults(Record):
+    env: str
+    runs: List[RegimeRun]
+
+
+class Regime(ResultsFile):
+    results: RegimeResults

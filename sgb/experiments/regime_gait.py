@@ -18,9 +18,11 @@ by a later run of this experiment), one already in the results file is not evalu
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Annotated
 
 import jax
 import numpy as np
+from pydantic import Field
 
 from sgb import validation
 from sgb.profiles import PROFILE_NAMES, check_profile
@@ -33,6 +35,17 @@ from sgb.rl.ppo import PPOConfig
 from sgb.rl.regime_runs import RUNS, RegimeRun, run_config
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_root, finished_run
 from sgb.rl.trainer import make_trainer
+from sgb.schemas import (
+    MAX_SPEED,
+    Count,
+    MaybeEmpty,
+    Positive,
+    Record,
+    ResultsFile,
+    Return,
+    Seed,
+    Speed,
+)
 
 WALKING_SPEED = 1.0  # m/s: the forward reward per step equals the healthy reward (1)
 
@@ -137,3 +150,22 @@ def regime_gait(payload: Payload | None) -> dict[str, str]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the regime's gaits (``regime_gait``)."""
     return regime_gait(records.get("regime_gait"))
+
+
+class GaitRun(Record):
+    cell_types: Count | None
+    seed: Seed
+    genome: str
+    window_return: Return
+    forward_velocity: Speed
+    forward_velocity_sem: Annotated[float, Field(ge=0, le=MAX_SPEED)]
+    walks: bool
+
+
+class RegimeGaitResults(Record):
+    walking_speed: Positive
+    runs: MaybeEmpty[GaitRun]
+
+
+class RegimeGait(ResultsFile):
+    results: RegimeGaitResults

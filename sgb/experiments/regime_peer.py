@@ -24,6 +24,17 @@ from sgb.recording import Recording, start
 from sgb.results import Payload, Records
 from sgb.rl.regime_runs import RUNS, RegimeRun, RegimeRuns, run_config, train_regime
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run
+from sgb.schemas import (
+    Finite,
+    List,
+    MaybeEmpty,
+    NonNegative,
+    Record,
+    ResultsFile,
+    Return,
+    Steps,
+    Training,
+)
 
 STEPS = 1_638_400  # 10 updates of 2048 environments x 5 steps x 16 unrolls
 EVAL_ENVS = 256  # the size of their recorded evaluations
@@ -145,3 +156,30 @@ def regime_peer(payload: Payload | None) -> dict[str, str]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the regime beside the authors' code (``regime_peer``)."""
     return regime_peer(records.get("regime_peer"))
+
+
+class PeerRun(Training):
+    label: str
+
+
+class PeerComparison(Record):
+    """One evaluation point: our seeds' returns beside the authors' one run."""
+
+    label: str
+    step: Steps
+    ours: List[Return]
+    mean: Return
+    sd: NonNegative | None
+    theirs: Return | None
+    interval: List[Finite] | None
+    inside: bool | None
+
+
+class RegimePeerResults(Record):
+    env: str
+    runs: MaybeEmpty[PeerRun]
+    comparison: MaybeEmpty[PeerComparison]
+
+
+class RegimePeer(ResultsFile):
+    results: RegimePeerResults

@@ -30,6 +30,17 @@ from sgb.rl.protocols import (
 )
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, seed_sem, trained_run
 from sgb.rl.sweep import sweep_config
+from sgb.schemas import (
+    Finite,
+    List,
+    NonNegative,
+    Positive,
+    Probability,
+    Record,
+    ResultsFile,
+    Return,
+    Seed,
+)
 
 
 @dataclass(frozen=True)
@@ -172,3 +183,28 @@ def spread_table(payload: Payload) -> pd.DataFrame:
         }
         for r in payload["results"]["runs"]
     )
+
+
+class PairedTest(Record):
+    t: Finite
+    p: Probability
+
+
+class SpreadRun(Record):
+    rho_init: Finite
+    sigma_init: Positive
+    seed: Seed
+    checkpoint: str
+    sigma_trained: NonNegative
+    individuals_mean: Return
+    individuals_sd: NonNegative
+    mean_network_mean: Return
+    paired_test: PairedTest
+
+
+class SpreadResults(Record):
+    runs: List[SpreadRun]
+
+
+class Spread(ResultsFile):
+    results: SpreadResults

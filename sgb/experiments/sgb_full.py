@@ -25,6 +25,7 @@ added to the results file at once (under that file's lock).
 
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -38,6 +39,18 @@ from sgb.priors import GaussianPrior
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.recording import Recording, start
 from sgb.results import Payload, Records
+from sgb.schemas import (
+    Accuracy,
+    Compression,
+    Each,
+    Finite,
+    List,
+    NonNegative,
+    Provenance,
+    Record,
+    ResultsFile,
+    Seed,
+)
 from sgb.supervised import ClassifierConfig
 from sgb.supervised_sweep import (
     IMAGE_RATIOS,
@@ -495,3 +508,43 @@ def sgb_full_table(payload: Payload) -> pd.DataFrame:
         .sort_values(["variant", "compression (ours)"])
         .reset_index()
     )
+
+
+class MeanSigma(Record):
+    mean_sigma: NonNegative
+
+
+class SgbFullCell(Record):
+    variant: str
+    model: str
+    setting: Finite
+    seed: Seed
+    accuracy: Accuracy
+    mean_network: Accuracy
+    compression: Compression
+    compression_authors: Compression
+    layers: List[MeanSigma]
+
+
+class SgbFullResults(Record):
+    cells: Each(SgbFullCell)
+    variants: dict[str, Any]
+
+
+class Sweep(Record):
+    ratios: List[Compression]
+    seeds: List[Seed]
+
+
+class SgbFullConfig(Record):
+    variants: List[str]
+    sweep: Sweep
+
+
+class SgbFullProvenance(Provenance):
+    config: SgbFullConfig
+
+
+class SgbFull(ResultsFile):
+    provenance: SgbFullProvenance
+    results: SgbFullResults

@@ -22,6 +22,19 @@ from sgb.genome import softplus
 from sgb.prose import NOT_RUN, Card
 from sgb.recording import start
 from sgb.results import Records
+from sgb.schemas import (
+    Accuracy,
+    Correlation,
+    Count,
+    Each,
+    Finite,
+    List,
+    NonNegative,
+    Positive,
+    Record,
+    ResultsFile,
+    Steps,
+)
 from sgb.supervised import ClassifierConfig, train_and_evaluate
 
 
@@ -665,3 +678,116 @@ def evidence(records: Records) -> list[Row]:
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 3 glues: Theorem A.2's rows at the end of training (``descent``)."""
     return descent(card)
+
+
+class Trajectory(Record):
+    mu0: Finite
+    sigma0: NonNegative
+    gap: List[Finite]
+    gap_stderr: List[NonNegative]
+    prediction: List[Finite]
+
+
+class Trajectories(Record):
+    convex: Trajectory
+    concave: Trajectory
+    nonconvex: Trajectory
+
+
+class Settled(Record):
+    settled_mean: List[NonNegative]
+    settled_sd: List[NonNegative]
+
+
+class SigmaRuns(Record):
+    softplus: Settled
+
+
+class ElboToy(Record):
+    kl_weights: List[NonNegative]
+    predicted_sigma: List[NonNegative]
+    steps: List[Steps]
+    runs: SigmaRuns
+
+
+class Gap(Record):
+    gap: Finite
+    stderr: NonNegative
+
+
+class ScaleGap(Record):
+    scale: NonNegative
+    predicted: Finite
+    train_cross_entropy: Gap
+    train_error_rate: Gap
+    test_error_rate: Gap
+
+
+class LayerGap(Gap):
+    layer: str
+    predicted: Finite
+
+
+class MeanNetworkAccuracy(Record):
+    mean_network: Accuracy
+
+
+class Hutchinson(Record):
+    value: Finite
+    stderr: NonNegative
+
+
+class NetworkGap(Record):
+    cell_types: List[Count | None]
+    sigma_mean: NonNegative
+    accuracy: MeanNetworkAccuracy
+    hutchinson_probes: Count
+    hutchinson: Hutchinson
+    scales: List[ScaleGap]
+    layers: List[LayerGap]
+
+
+class Fit(Record):
+    median_ratio: Finite
+    ratio_q10: Finite
+    ratio_q90: Finite
+    log_correlation: Correlation
+
+
+class Fits(Record):
+    at_mean: Fit
+    population: Fit
+
+
+class BothAccuracies(MeanNetworkAccuracy):
+    population_average: Accuracy
+
+
+class Sigma2(Record):
+    sigma2: List[NonNegative]
+
+
+class FixedPointRun(Record):
+    epochs: Count
+    kl_weight: NonNegative
+    prior_sigma: Positive
+    population_hessians: Count
+    accuracy: BothAccuracies
+    layers: Each(Sigma2)
+    summary: Fits
+
+
+class FixedPoint(Record):
+    cell_types: List[Count | None]
+    runs: List[FixedPointRun]
+
+
+class TheoryResults(Record):
+    trajectories: Trajectories
+    elbo_toy: ElboToy = None
+    network: List[NetworkGap]
+    fixed_point: List[FixedPoint] = None
+
+
+class Theory(ResultsFile):
+    results: TheoryResults
