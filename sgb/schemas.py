@@ -15,6 +15,7 @@ may be absent, but not null. Lists are non-empty unless ``Maybe``-empty, and a t
 """
 
 import json
+import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
@@ -32,18 +33,26 @@ class Record(BaseModel):
     model_config = ConfigDict(extra="allow", allow_inf_nan=False, strict=True, frozen=True)
 
     # A field read by its name as a key, as a dict is read: for the readers not yet
-    # converted to attributes.
+    # converted to attributes (refused where SGB_STRICT_RECORDS is set, to find them).
     def __getitem__(self, key: str) -> Any:
+        _bridge(self, key)
         try:
             return getattr(self, key)
         except AttributeError:
             raise KeyError(key) from None
 
     def get(self, key: str, default: Any = None) -> Any:
+        _bridge(self, key)
         return getattr(self, key, default) if key in self else default
 
     def __contains__(self, key: str) -> bool:
+        _bridge(self, key)
         return key in self.model_fields_set or key in (self.model_extra or {})
+
+
+def _bridge(record: Record, key: str) -> None:
+    if os.environ.get("SGB_STRICT_RECORDS"):
+        raise TypeError(f"{type(record).__name__} read as a dict ([{key!r}]): read it by attribute")
 
 
 # Units and bounds --------------------------------------------------------------------------
