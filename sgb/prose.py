@@ -11,7 +11,7 @@ import math
 from importlib import metadata
 
 from sgb.claims import Row
-from sgb.results import Payload
+from sgb.schemas import BenchBackends
 
 NOT_RUN = "not yet run"
 ROW_PARTS = ("verdict", "ours", "detectable", "decide")
@@ -45,10 +45,10 @@ GENOMES = (("our genome", "ours"), ("the authors' genome", "authors"))
 # Chapter 5 --------------------------------------------------------------------------------
 
 
-def backends(bench: Payload) -> dict[str, str]:
+def backends(bench: BenchBackends) -> dict[str, str]:
     """``mjx_vs_spring`` (MJX's training env-steps/s over spring's), ``fastest_backend`` and
-    the installed ``brax_version``, from ``rl/bench_backends.json``."""
-    speeds = {name: s["train_steps_per_s"] for name, s in bench["results"]["throughput"].items()}
+    the installed ``brax_version``, from ``benchmarks/bench_backends.py``'s results."""
+    speeds = {name: s.train_steps_per_s for name, s in bench.results.throughput.items()}
     return {
         "mjx_vs_spring": f"{speeds['mjx'] / speeds['spring']:.2f}x",
         "fastest_backend": f"`{max(speeds, key=speeds.get)}`",

@@ -108,13 +108,13 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h"
 
 
-def provenance_line(payload: Payload) -> str:
+def provenance_line(record: ResultsFile) -> str:
     """One line of where a results file comes from: profile, seeds, the commits that ran
     it (10 hex digits each, ``+dirty`` kept), date and wall time on its backend."""
-    record = payload["provenance"]
-    shown = (c[:10] + c[40:] for c in record.get("git_commits", [record["git_commit"]]))
+    made = record.provenance
+    shown = (c[:10] + c[40:] for c in made.git_commits or [made.git_commit])
     commits = ", ".join(dict.fromkeys(shown))  # in order, each once
     return (
-        f"profile {record['profile']}, seeds {record['seeds']}, commit {commits}, "
-        f"{record['date'][:10]}, {_duration(record['wall_time_s'])} on {record['backend']}"
+        f"profile {made.profile}, seeds {made.seeds}, commit {commits}, "
+        f"{made.date[:10]}, {_duration(made.wall_time_s)} on {made.backend}"
     )

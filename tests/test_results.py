@@ -6,7 +6,7 @@ import shutil
 
 import pytest
 
-from sgb import gather, manifest, results
+from sgb import gather, manifest, results, schemas
 from sgb.experiments import (
     dgb_budget,
     dgb_full,
@@ -87,13 +87,13 @@ def test_the_manifest_refuses_a_one_number_edit_of_a_committed_file(tmp_path):
 def test_provenance_line_names_profile_seeds_commits_date_and_wall_time():
     payload = raw("fig2_fashion-mnist_cpu.json")
     record = payload["provenance"]
-    line = results.provenance_line(payload)
+    line = results.provenance_line(RECORDS("fig2"))
     assert "\n" not in line
     assert line.startswith(f"profile {record['profile']}, seeds {record['seeds']}, ")
     assert all(commit[:10] in line for commit in record["git_commits"])
     commits = ["9dbd713a4e" + "0" * 30, "9dbd713a4e" + "0" * 30 + "+dirty", "c7ecc8e69f" * 4]
     mixed = {**payload, "provenance": {**record, "git_commits": commits}}
-    several = results.provenance_line(mixed)
+    several = results.provenance_line(schemas.ResultsFile.model_validate(mixed))
     assert several.count("9dbd713a4e,") == 1 and "9dbd713a4e+dirty" in several  # each once
     assert "c7ecc8e69f" in several
     assert record["date"][:10] in line
@@ -104,9 +104,9 @@ def test_provenance_line_names_profile_seeds_commits_date_and_wall_time():
     ("seconds", "shown"), [(313.1, "5 min"), (59.6, "60 s"), (28236.56, "7.8 h")]
 )
 def test_provenance_line_gives_the_wall_time_in_a_readable_unit(seconds, shown):
-    record = {"profile": "cpu", "seeds": [0], "git_commit": "0123456789abcdef", "backend": "cpu"}
-    payload = {"provenance": record | {"date": "2026-12-01T20:18:05+00:00", "wall_time_s": seconds}}
-    line = results.provenance_line(payload)
+    made = {"profile": "cpu", "seeds": [0], "git_commit": "0123456789abcdef", "backend": "cpu"}
+    made |= {"config": {}, "date": "2026-12-01T20:18:05+00:00", "wall_time_s": seconds}
+    line = results.provenance_line(schemas.ResultsFile.model_validate({"provenance": made}))
     assert line == f"profile cpu, seeds [0], commit 0123456789, 2026-12-01, {shown} on cpu"
 
 
