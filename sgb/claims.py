@@ -15,8 +15,9 @@ contradiction and to size the budget is stated in the row (``Row.basis``).
 
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 import pandas as pd
@@ -28,6 +29,9 @@ from sgb.reliability import (
     episodes_to_detect,
     variance_split,
 )
+
+if TYPE_CHECKING:
+    from sgb.supervised_sweep import SweepRecord
 
 
 class PaperBudget(NamedTuple):
@@ -498,7 +502,7 @@ def untestable(key: str, reason: str) -> Row:
 
 
 def accuracies(
-    records: list[dict],
+    records: "Sequence[SweepRecord]",
     model: str,
     min_seeds: int = 1,
     score: str = "accuracy",
@@ -506,13 +510,13 @@ def accuracies(
 ) -> dict[float, np.ndarray]:
     """Per setting of ``model`` (keyed by its compression under ``count``: ``"compression"``,
     ours, or ``"compression_authors"``) run at ``min_seeds`` seeds or more, the seeds'
-    accuracies (their field ``score``)."""
-    by_setting: dict[int, list[dict]] = {}
+    accuracies (their field ``score``: ``"accuracy"`` or ``"mean_network"``)."""
+    by_setting: dict[float, list] = {}
     for r in records:
-        if r["model"] == model:
-            by_setting.setdefault(r["setting"], []).append(r)
+        if r.model == model:
+            by_setting.setdefault(r.setting, []).append(r)
     return {
-        float(np.mean([r[count] for r in rs])): np.array([r[score] for r in rs])
+        float(np.mean([getattr(r, count) for r in rs])): np.array([getattr(r, score) for r in rs])
         for rs in by_setting.values()
         if len(rs) >= min_seeds
     }

@@ -19,6 +19,7 @@ from sgb.data import Dataset
 from sgb.dgb import DGBConfig
 from sgb.priors import GaussianPrior
 from sgb.provenance import git_commit
+from sgb.schemas import Accuracy, Compression, Finite, NonNegative, Record, Seed
 from sgb.stats import crossings, sem
 from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate
 
@@ -306,21 +307,40 @@ def cell_config(
     )
 
 
-def figure2_records(results: dict, rounds: int) -> list[dict]:
-    """The cells that trained all ``rounds``, as Figure 2's sweep records them: ``model``
-    ("dgb"), ``setting`` (the target ratio), ``seed``, ``compression`` (ours),
+class SweepRecord(Record):
+    """One cell of a Figure 2 sweep as ``run_one`` records it: the fields its readers use."""
+
+    model: str
+    setting: Finite
+    seed: Seed
+    accuracy: Accuracy
+    compression: Compression
+    compression_authors: Compression
+
+
+class FullDgbRecord(SweepRecord):
+    """A cell of ``sgb.experiments.dgb_full`` that trained all its rounds, as Figure 2's
+    sweep records a DGB (``figure2_records``)."""
+
+    nominal_ratio: NonNegative
+
+
+def figure2_records(results: Record, rounds: int) -> list[FullDgbRecord]:
+    """The cells of ``results`` (``sgb.experiments.dgb_full``'s ``DgbFullResults``) that
+    trained all ``rounds``, as Figure 2's sweep records them: ``model`` ("dgb"),
+    ``setting`` (the target ratio), ``seed``, ``compression`` (ours),
     ``compression_authors``, ``nominal_ratio`` and ``accuracy``, the test accuracy of the
     network of best validation accuracy (a fraction)."""
     return [
-        {
-            "model": "dgb",
-            "setting": cell["ratio"],
-            "seed": cell["seed"],
-            "compression": cell["compression_ours"],
-            "compression_authors": cell["compression_authors"],
-            "nominal_ratio": cell["nominal_ratio"],
-            "accuracy": cell["records"][-1]["test_accuracy"],
-        }
-        for cell in results["cells"].values()
-        if cell["records"] and cell["records"][-1]["rounds"] == rounds
+        FullDgbRecord(
+            model="dgb",
+            setting=cell.ratio,
+            seed=cell.seed,
+            compression=cell.compression_ours,
+            compression_authors=cell.compression_authors,
+            nominal_ratio=cell.nominal_ratio,
+            accuracy=cell.records[-1].test_accuracy,
+        )
+        for cell in results.cells.values()
+        if cell.records and cell.records[-1].rounds == rounds
     ]

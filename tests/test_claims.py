@@ -14,6 +14,8 @@ from sgb.experiments import (
     innate_start,
     innate_start_supervised,
 )
+from sgb.experiments import dgb_budget as dgb_budget_runs
+from sgb.experiments import dgb_full as dgb_full_runs
 from sgb.experiments import populations as population_runs
 from sgb.experiments import sgb_full as sgb_full_runs
 from sgb.experiments import theory as theory_runs
@@ -147,16 +149,59 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
 def test_figure2_ratio_tests_find_a_known_difference_at_every_ratio():
     rng = np.random.default_rng(2)
     records = [
-        {"model": model, "setting": s, "seed": seed, "compression": ratio, "accuracy": acc}
+        {
+            "model": model,
+            "setting": s,
+            "seed": seed,
+            "compression": ratio,
+            "compression_authors": ratio,
+            "accuracy": acc,
+        }
         for s, ratio in enumerate((10.0, 100.0, 700.0))
         for model, shift in (("sgb", 0.05 if ratio > 50 else -0.05), ("dgb", 0.0))
         for seed, acc in enumerate(0.8 + shift + 0.002 * rng.standard_normal(4))
     ]
-    table = fig2.figure2_ratio_tests({"records": records})
+    table = fig2.figure2_ratio_tests([fig2.Fig2Record.model_validate(r) for r in records])
     assert list(table.index) == [10, 100, 700]
     expected = np.array([-5.0, 5.0, 5.0])
     assert np.all(table["95 % CI low"] < expected) and np.all(expected < table["95 % CI high"])
     assert np.all(table["p"] < 1e-3) and set(table["seeds (SGB, DGB)"]) == {"4, 4"}
+
+
+def _sgb_full_results(cells: dict, variants: dict | None = None) -> sgb_full_runs.SgbFullResults:
+    """The results of ``sgb.experiments.sgb_full`` holding ``cells`` (and ``variants``),
+    each cell completed with the fields its model requires that a test leaves out (the
+    functions tested do not read them)."""
+    filler = {"model": "sgb", "mean_network": 0.5, "layers": [{"mean_sigma": 0.1}]}
+    complete = {
+        name: {**filler, "compression_authors": cell["compression"], **cell}
+        for name, cell in cells.items()
+    }
+    return sgb_full_runs.SgbFullResults.model_validate(
+        {"dataset": "toy", "variants": variants or {}, "cells": complete}
+    )
+
+
+def _dgb_full_results(cells: dict) -> dgb_full_runs.DgbFullResults:
+    """The results of ``sgb.experiments.dgb_full`` holding ``cells``, completed with the
+    fields their model requires that a test leaves out (the functions tested do not read
+    them)."""
+    complete = {
+        name: {
+            "gnet_width": 76,
+            **cell,
+            "records": [
+                {
+                    "best_validation_accuracy": r["test_accuracy"],
+                    "generated_test_accuracy": r["test_accuracy"],
+                    **r,
+                }
+                for r in cell["records"]
+            ],
+        }
+        for name, cell in cells.items()
+    }
+    return dgb_full_runs.DgbFullResults.model_validate({"cells": complete})
 
 
 def test_sgb_variant_tests_find_a_known_shift_and_skip_ratios_without_two_seeds():
@@ -178,12 +223,12 @@ def test_sgb_variant_tests_find_a_known_shift_and_skip_ratios_without_two_seeds(
         for seed in range(4)
     }
     cells["rho_ours_700.0_0"] = {**cells["authors_700.0_0"], "variant": "rho_ours"}
-    table = sgb_full_runs.sgb_variant_tests({"cells": cells}, "rho_ours")
+    table = sgb_full_runs.sgb_variant_tests(_sgb_full_results(cells), "rho_ours")
     assert list(table.index) == [10, 400]
     assert np.all(table["95 % CI low"] < [3.0, 0.0]) and np.all([3.0, 0.0] < table["95 % CI high"])
     assert table["p"].iloc[0] < 1e-3 and table["p"].iloc[1] > 1e-3
     assert set(table["seeds (rho_ours, authors)"]) == {"4, 4"}
-    assert sgb_full_runs.sgb_variant_tests({"cells": cells}, "per_pair").empty
+    assert sgb_full_runs.sgb_variant_tests(_sgb_full_results(cells), "per_pair").empty
 
 
 def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfinished_cells():
@@ -202,7 +247,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
                 "compression_authors": 1.02 * sgb_ratio,
                 "accuracy": 0.7 - 0.4 * (ratio > 500) + 0.004 * rng.standard_normal(),
             }
-    sgb_full = {"variants": {"authors": {}}, "cells": cells}
+    sgb_full = _sgb_full_results(cells, {"authors": {}})
 
     def dgb_cell(ratio: float, seed: int, accuracy: float, rounds: int = 500) -> dict:
         return {
@@ -223,7 +268,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     dgb["400_0"] = dgb_cell(400.0, 0, 0.5)  # one seed: no test
     dgb["700_3"] = dgb_cell(700.0, 3, 0.9, rounds=475)  # not finished (it ran 475 of 500)
     dgb["700_3"]["records"].pop()
-    rows = sgb_full_runs.figure2_full_rows(sgb_full, {"cells": dgb}, 500, "Fashion-MNIST")
+    rows = sgb_full_runs.figure2_full_rows(sgb_full, _dgb_full_results(dgb), 500, "Fashion-MNIST")
     assert [r.setting for r in rows] == [
         f"Fashion-MNIST, the authors' DGB layout at {d}x (target {t}x), the SGB "
         f"(KL per synapse, rho from -7: the authors') at {s}x"
@@ -237,7 +282,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     # the curves cross where the 10-point lead changes hands, halfway in log(ratio), under
     # either count of compression
     ours, authors = sgb_full_runs.figure2_full_crossover(
-        sgb_full, {"cells": dgb}, 500, "Fashion-MNIST"
+        sgb_full, _dgb_full_results(dgb), 500, "Fashion-MNIST"
     )
     assert ours.setting.split(";")[0].endswith(", our count")
     assert authors.setting.split(";")[0].endswith(", the authors' count")
@@ -247,7 +292,7 @@ def test_full_budget_rows_pair_each_dgb_ratio_with_the_nearest_sgb_and_skip_unfi
     assert 300 < ours.test.low and ours.test.high < 500
     for name, cell in dgb.items():  # the DGB far above the SGB at every ratio: no crossing
         cell["records"][-1]["test_accuracy"] += 0.5 * name.startswith("700")
-    for apart in sgb_full_runs.figure2_full_crossover(sgb_full, {"cells": dgb}, 500, "x"):
+    for apart in sgb_full_runs.figure2_full_crossover(sgb_full, _dgb_full_results(dgb), 500, "x"):
         assert apart.test is None and "0% of simulated curves cross" in apart.setting
         assert apart.verdict == verdicts.CONTRADICTED
 
@@ -418,7 +463,7 @@ def test_the_supervised_population_rows_pair_each_seeds_individuals_with_its_mea
                 "mean_network": mean_network,
                 "accuracy": mean_network + (lead + wobble) / 100,
             }
-    rows = sgb_full_runs.supervised_population_rows({"cells": cells}, "toy")
+    rows = sgb_full_runs.supervised_population_rows(_sgb_full_results(cells), "toy")
     assert [r.setting for r in rows] == [
         f"toy, the SGB ({sgb_full_runs.SGB_VARIANTS[v]}) at 198x" for v in ("authors", "per_pair")
     ]
@@ -489,12 +534,27 @@ def _kl_cells(shift: float) -> dict:
 def test_the_kl_share_row_weighs_the_kls_effect_against_the_dgbs_whole_lead():
     """The DGB 20 points above the authors' SGB: a weaker KL that closes 8 of them is
     reproduced in direction but smaller; one that closes all 20 is reproduced."""
-    budget = {"records": [{"rounds": 500, "test_accuracy": 0.80}]}
-    part = sgb_full_runs.kl_share_row(_kl_cells(8.0), budget, "toy")
+    budget = dgb_budget_runs.DgbBudgetResults.model_validate(
+        {
+            "dataset": "toy",
+            "compression_ours": 10.0,
+            "records": [
+                {
+                    "rounds": 500,
+                    "gnet_width": 1012,
+                    "best_validation_accuracy": 0.80,
+                    "test_accuracy": 0.80,
+                    "generated_test_accuracy": 0.80,
+                }
+            ],
+            "uncompressed_same_budget": {"epochs": 83, "accuracy": 0.89},
+        }
+    )
+    part = sgb_full_runs.kl_share_row(_sgb_full_results(**_kl_cells(8.0)), budget, "toy")
     assert part.paper_effect == pytest.approx(20.0)
     assert part.test.estimate == pytest.approx(8.0)
     assert part.verdict == verdicts.SMALLER
-    whole = sgb_full_runs.kl_share_row(_kl_cells(20.0), budget, "toy")
+    whole = sgb_full_runs.kl_share_row(_sgb_full_results(**_kl_cells(20.0)), budget, "toy")
     assert whole.verdict == verdicts.REPRODUCED
     one_seed = {k: c for k, c in _kl_cells(8.0)["cells"].items() if c["seed"] == 0}
-    assert sgb_full_runs.kl_share_row({"cells": one_seed}, budget, "toy") is None
+    assert sgb_full_runs.kl_share_row(_sgb_full_results(one_seed), budget, "toy") is None

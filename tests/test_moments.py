@@ -180,5 +180,5 @@ def test_mean_gap_smoke_runs_end_to_end_and_resumes(tmp_path, monkeypatch):
     from sgb.plots.mean_gap import plot_mean_gap
 
     _, ax = subplots()
-    assert plot_mean_gap(results, ax=ax) is ax
+    assert plot_mean_gap(mean_gap.MeanGap.model_validate(payload).results, ax=ax) is ax
     assert len(ax.containers) == 3 * 2  # a bar container and an error bar per series

@@ -89,8 +89,8 @@ def test_the_texts_are_the_files_values():
     bench = RECORDS("bench_backends")["results"]["throughput"]
     ratio = bench["mjx"]["train_steps_per_s"] / bench["spring"]["train_steps_per_s"]
     assert prose.backends(RECORDS("bench_backends"))["mjx_vs_spring"] == (f"{ratio:.2f}x")
-    fashion = RECORDS("fig2")["results"]
-    dense = fashion["ours"]["summary"]["dense"]["mean"][0]
+    fashion = RECORDS("fig2").results
+    dense = fashion.ours.summary.dense.mean[0]
     assert fig2.figure2(fashion, {})["f2_dense"] == f"{100 * dense:.1f} %"
 
 

@@ -225,13 +225,13 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
     assert len(table) == len(payload["results"]["cells"])
     rounds = payload["provenance"]["config"]["dgb"]["rounds"]
     finished = table[table["rounds"] == rounds].set_index(["target ratio", "seed"])
-    records = figure2_records(payload["results"], rounds)
+    records = figure2_records(RECORDS("dgb_full").results, rounds)
     assert len(records) == len(finished) > 0
     for r in records:
-        row = finished.loc[(r["setting"], r["seed"])]
-        assert 100 * r["accuracy"] == pytest.approx(row["test accuracy %"])
-        assert r["compression"] == row["compression (ours)"]
-        assert r["nominal_ratio"] == row["nominal ratio (paper's axis)"]
+        row = finished.loc[(r.setting, r.seed)]
+        assert 100 * r.accuracy == pytest.approx(row["test accuracy %"])
+        assert r.compression == row["compression (ours)"]
+        assert r.nominal_ratio == row["nominal ratio (paper's axis)"]
 
 
 def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():

@@ -29,7 +29,7 @@ from sgb.prose import Card, percent
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
-from sgb.schemas import Accuracy, Count, DgbRecord, List, Record, ResultsFile
+from sgb.schemas import Accuracy, Compression, Count, DgbRecord, List, Record, ResultsFile
 from sgb.supervised import DenseConfig, train_and_evaluate
 
 PROFILES: dict[str, BudgetConfig] = {
@@ -116,43 +116,43 @@ def _write(recording: Recording, results: dict) -> Path:
     return recording.write(results, [recording.config.dgb.seed], parts=parts)
 
 
-def dgb_budget(results: dict, dense_accuracy: float) -> dict[str, str]:
+def dgb_budget(results: "DgbBudgetResults", dense_accuracy: float) -> dict[str, str]:
     """The DGB budget run (``dgb_budget_fashion-mnist_cpu.json``'s results): test accuracy
     after 25, 100, 250 and 500 rounds (``budget_25``, ...), the first round within 3 points
     of ``dense_accuracy`` (a fraction; ``budget_near_rounds``), the best validation at 500
     (``budget_val_500``) and the uncompressed network at the same budget (``budget_same``,
     ``budget_same_epochs``)."""
-    records = results["records"]
-    at = {r["rounds"]: r for r in records}
-    near = next(r for r in records if r["test_accuracy"] >= dense_accuracy - 0.03)
-    same = results["uncompressed_same_budget"]
-    texts = {f"budget_{n}": percent(at[n]["test_accuracy"]) for n in (25, 100, 250, 500)}
+    records = results.records
+    at = {r.rounds: r for r in records}
+    near = next(r for r in records if r.test_accuracy >= dense_accuracy - 0.03)
+    same = results.uncompressed_same_budget
+    texts = {f"budget_{n}": percent(at[n].test_accuracy) for n in (25, 100, 250, 500)}
     return texts | {
-        "budget_near_rounds": str(near["rounds"]),
-        "budget_val_500": percent(at[500]["best_validation_accuracy"]),
-        "budget_same": percent(same["accuracy"]),
-        "budget_same_epochs": str(same["epochs"]),
+        "budget_near_rounds": str(near.rounds),
+        "budget_val_500": percent(at[500].best_validation_accuracy),
+        "budget_same": percent(same.accuracy),
+        "budget_same_epochs": str(same.epochs),
     }
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 4 glues of the DGB at the authors' budget (``dgb_budget``), beside the
     uncompressed network of Figure 2's cpu sweep."""
-    dense = records("fig2")["results"]["ours"]["summary"]["dense"]["mean"][0]
-    return dgb_budget(records("dgb_budget")["results"], dense)
+    dense = records("fig2").results.ours.summary.dense.mean[0]
+    return dgb_budget(records("dgb_budget").results, dense)
 
 
-def dgb_budget_table(results: dict) -> pd.DataFrame:
+def dgb_budget_table(results: "DgbBudgetResults") -> pd.DataFrame:
     """The DGB budget run (``sgb.experiments.dgb_budget``), one row per recorded round:
     best validation accuracy, its network's test accuracy and the generated network's (%)."""
     return pd.DataFrame(
         {
-            "rounds": r["rounds"],
-            "best validation %": 100 * r["best_validation_accuracy"],
-            "its test %": 100 * r["test_accuracy"],
-            "generated test %": 100 * r["generated_test_accuracy"],
+            "rounds": r.rounds,
+            "best validation %": 100 * r.best_validation_accuracy,
+            "its test %": 100 * r.test_accuracy,
+            "generated test %": 100 * r.generated_test_accuracy,
         }
-        for r in results["records"]
+        for r in results.records
     )
 
 
@@ -161,8 +161,16 @@ class SameBudget(Record):
     accuracy: Accuracy
 
 
+class BudgetRound(DgbRecord):
+    """A recorded round of the DGB, with its g-net's width."""
+
+    gnet_width: Count
+
+
 class DgbBudgetResults(Record):
-    records: List[DgbRecord]
+    dataset: str
+    compression_ours: Compression
+    records: List[BudgetRound]
     uncompressed_same_budget: SameBudget
 
 

@@ -27,7 +27,6 @@ from sgb.data import load
 from sgb.dgb import DGBConfig
 from sgb.profiles import PROFILE_NAMES
 from sgb.recording import Recording, start
-from sgb.results import Payload
 from sgb.schemas import (
     Compression,
     Count,
@@ -156,25 +155,23 @@ def _write(recording: Recording, results: dict) -> Path:
     return recording.write(results, seeds, parts=[c for cell in cells for c in cell["records"]])
 
 
-def dgb_full_table(payload: Payload) -> pd.DataFrame:
+def dgb_full_table(payload: "DgbFull") -> pd.DataFrame:
     """Figure 2's DGB at the authors' budget (``sgb.experiments.dgb_full``), one row per
     cell: target ratio, seed, g-net width, compression under both conventions beside the
     paper's nominal ratio for that width, rounds trained and the test accuracy (%) of the
     network of best validation accuracy so far."""
     return pd.DataFrame(
         {
-            "target ratio": c["ratio"],
-            "seed": c["seed"],
-            "g-net width": c["gnet_width"],
-            "compression (ours)": c["compression_ours"],
-            "compression (authors')": c["compression_authors"],
-            "nominal ratio (paper's axis)": c["nominal_ratio"],
-            "rounds": c["records"][-1]["rounds"] if c["records"] else 0,
-            "test accuracy %": 100 * c["records"][-1]["test_accuracy"]
-            if c["records"]
-            else float("nan"),
+            "target ratio": c.ratio,
+            "seed": c.seed,
+            "g-net width": c.gnet_width,
+            "compression (ours)": c.compression_ours,
+            "compression (authors')": c.compression_authors,
+            "nominal ratio (paper's axis)": c.nominal_ratio,
+            "rounds": c.records[-1].rounds if c.records else 0,
+            "test accuracy %": 100 * c.records[-1].test_accuracy if c.records else float("nan"),
         }
-        for c in payload["results"]["cells"].values()
+        for c in payload.results.cells.values()
     ).sort_values(["target ratio", "seed"], ignore_index=True)
 
 

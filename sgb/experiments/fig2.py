@@ -43,9 +43,8 @@ from sgb.schemas import (
     NonNegative,
     Record,
     ResultsFile,
-    Seed,
 )
-from sgb.supervised_sweep import SWEEPS, run_one, sweep_cells, sweep_summary
+from sgb.supervised_sweep import SWEEPS, SweepRecord, run_one, sweep_cells, sweep_summary
 
 # the registry reads an experiment's profiles here: profile -> dataset -> sweep and ablation
 PROFILES = SWEEPS
@@ -108,10 +107,10 @@ def _write(
     return recording.write(results, seeds, parts=records + done["ablation_records"])
 
 
-def figure2_rows(results: dict, dataset: str) -> list[Row]:
+def figure2_rows(results: "Fig2Results", dataset: str) -> list[Row]:
     """Figure 2's four statements on ``dataset`` (accuracies in percentage points)."""
-    sgb = accuracies(results["records"], "sgb")
-    dgb = accuracies(results["records"], "dgb")
+    sgb = accuracies(results.records, "sgb")
+    dgb = accuracies(results.records, "dgb")
     low = [min(sgb), min(dgb)]
     ratios_s, ratios_d = sorted(sgb), sorted(dgb)
     seeds = len(sgb[ratios_s[0]])
@@ -151,18 +150,18 @@ def figure2_rows(results: dict, dataset: str) -> list[Row]:
     return rows
 
 
-def figure2_ratio_tests(results: dict) -> pd.DataFrame:
+def figure2_ratio_tests(records: list["Fig2Record"]) -> pd.DataFrame:
     """SGB minus DGB (``welch_table``) at every ratio the DGB ran, against the SGB at the
-    nearest ratio."""
-    sgb = accuracies(results["records"], "sgb")
-    dgb = accuracies(results["records"], "dgb")
+    nearest ratio, from a sweep's ``records``."""
+    sgb = accuracies(records, "sgb")
+    dgb = accuracies(records, "dgb")
     return welch_table(sgb, dgb, nearest_pairs(sgb, dgb), ("SGB", "DGB"))
 
 
-def figure2_crossover(rows: list[Row], results: dict, dataset: str) -> list[Row]:
+def figure2_crossover(rows: list[Row], results: "Fig2Results", dataset: str) -> list[Row]:
     """``crossover_row`` of Figure 2's cpu sweep (its ``results``) on ``dataset``, under
     each count of compression (``COUNTS``); its budget that of the sweep's ``rows``."""
-    records = results["records"]
+    records = results.records
     return [
         crossover_row(
             accuracies(records, "sgb", count=count),
@@ -176,7 +175,7 @@ def figure2_crossover(rows: list[Row], results: dict, dataset: str) -> list[Row]
     ]
 
 
-def figure2(results: dict, card: Card) -> dict[str, str]:
+def figure2(results: "Fig2Results", card: Card) -> dict[str, str]:
     """Figure 2 on Fashion-MNIST (``fig2_fashion-mnist_cpu.json``'s results): the
     scorecard rows (``f2_low``, ``f2_high400``, ``f2_high700``, ``f2_slow``, ``f2_cross`` and
     ``f2_cross_theirs``, the crossover under our count and the authors'),
@@ -195,17 +194,17 @@ def figure2(results: dict, card: Card) -> dict[str, str]:
     texts = {}
     for name, row in rows.items():
         texts |= row_texts(name, row)
-    summary = results["ours"]["summary"]
-    means = results["ours"]["summary_mean_network"]["sgb"]["mean"]
+    summary = results.ours.summary
+    means = results.ours.summary_mean_network.sgb.mean
     texts |= {
-        "f2_dense": percent(summary["dense"]["mean"][0]),
-        "f2_dgb_10x": percent(summary["dgb"]["mean"][0]),
-        "f2_dgb_best": percent(max(summary["dgb"]["mean"])),
-        "f2_sgb_10x": percent(summary["sgb"]["mean"][0]),
+        "f2_dense": percent(summary.dense.mean[0]),
+        "f2_dgb_10x": percent(summary.dgb.mean[0]),
+        "f2_dgb_best": percent(max(summary.dgb.mean)),
+        "f2_sgb_10x": percent(summary.sgb.mean[0]),
         "f2_meannet_range": f"{100 * min(means[:-1]):.0f}-{100 * max(means):.0f} %",
     }
-    for convention in ("ours", "authors"):
-        crossings = results[convention]["crossovers"]
+    for convention, part in (("ours", results.ours), ("authors", results.authors)):
+        crossings = part.crossovers
         texts[f"f2_crossing_{convention}"] = ", ".join(f"{c:.0f}x" for c in crossings) or "none"
     return texts
 
@@ -218,36 +217,35 @@ def evidence(records: Records) -> list[Row]:
     payload = records.get("fig2")
     if payload is None:
         return []
-    rows = figure2_rows(payload["results"], BOOK_DATASET)
-    return rows + figure2_crossover(rows, payload["results"], BOOK_DATASET)
+    rows = figure2_rows(payload.results, BOOK_DATASET)
+    return rows + figure2_crossover(rows, payload.results, BOOK_DATASET)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 4 glues of the cpu sweep (``figure2``)."""
-    return figure2(records("fig2")["results"], card)
+    return figure2(records("fig2").results, card)
 
 
-def figure2_table(results: dict) -> pd.DataFrame:
+def figure2_table(results: "Fig2Results") -> pd.DataFrame:
     """A Figure 2 sweep (``sgb.experiments.fig2``), one row per model and setting: its
     compression counted both ways, and innate test accuracy (%) mean and SEM over seeds
     (NaN with one seed)."""
-    ours, theirs = results["ours"]["summary"], results["authors"]["summary"]
+    ours, theirs = results.ours.summary, results.authors.summary
     rows = []
     for model in ("dense", "sgb", "dgb"):
-        authors_compression = dict(
-            zip(theirs[model]["setting"], theirs[model]["compression"], strict=True)
-        )
-        for i, setting in enumerate(ours[model]["setting"]):
-            sem = ours[model]["sem"][i]
+        curve, authors = getattr(ours, model), getattr(theirs, model)
+        authors_compression = dict(zip(authors.setting, authors.compression, strict=True))
+        for i, setting in enumerate(curve.setting):
+            sem = curve.sem[i]
             rows.append(
                 {
                     "model": model,
                     "setting": setting,
-                    "compression (ours)": ours[model]["compression"][i],
+                    "compression (ours)": curve.compression[i],
                     "compression (authors')": authors_compression[setting],
-                    "accuracy %": 100 * ours[model]["mean"][i],
+                    "accuracy %": 100 * curve.mean[i],
                     "SEM %": float("nan") if sem is None else 100 * sem,
-                    "seeds": ours[model]["n"][i],
+                    "seeds": curve.n[i],
                 }
             )
     return pd.DataFrame(rows)
@@ -279,16 +277,14 @@ class Convention(Record):
     crossovers: MaybeEmpty[Compression]
 
 
-class Fig2Record(Record):
-    model: str
-    setting: Finite
-    seed: Seed
-    accuracy: Accuracy
-    compression: Compression
+class Fig2Record(SweepRecord):
+    """One (model, setting, seed) cell of the sweep."""
 
 
 class Fig2Results(Record):
+    dataset: str
     records: List[Fig2Record]
+    ablation_records: MaybeEmpty[Fig2Record]
     ours: Convention
     authors: Convention
 

@@ -45,7 +45,17 @@ from sgb.prose import Card, mean_sem
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
-from sgb.schemas import Accuracy, Count, Finite, List, NonNegative, Record, ResultsFile, Seed
+from sgb.schemas import (
+    Accuracy,
+    Compression,
+    Count,
+    Finite,
+    List,
+    NonNegative,
+    Record,
+    ResultsFile,
+    Seed,
+)
 from sgb.stats import sem
 from sgb.supervised import make_model, train_and_evaluate
 from sgb.supervised_sweep import SWEEPS, CompressionSweep, cell_config
@@ -263,55 +273,60 @@ def _write(recording: Recording, sizes: tuple[int, ...], records: list[dict]) ->
     return recording.write(results, recording.config.seeds, parts=records)
 
 
-def mean_gap(results: dict) -> dict[str, str]:
+def mean_gap(results: "MeanGapResults") -> dict[str, str]:
     """The moment-matched network (``mean_gap_fashion-mnist_cpu.json``'s results): at 10x
     and 400x from rho -5 and at 10x from rho -7 (``gap10``, ``gap400``, ``gap10_rho7``),
     each network's accuracy (% +- SEM), the recovery and the trained sigma; per rho start,
     the hidden layer's rho travel and end (``gap_travel_5``, ``gap_rho_end_7``, ...), and
     the training steps (``gap_steps``)."""
-    cells = {(r["setting"], r["rho_init"]): r for r in results["summary"]}
+    cells = {(r.setting, r.rho_init): r for r in results.summary}
     texts = {}
     for name, cell in (("gap10", (785, -5.0)), ("gap400", (10, -5.0)), ("gap10_rho7", (785, -7.0))):
         row = cells[cell]
         for key in ("accuracy", "mean_network", "moment_network"):
-            texts[f"{name}_{key}"] = f"{100 * row[key]:.1f} ± {100 * row[key + '_sem']:.1f} %"
-        texts[f"{name}_recovery"] = f"{row['moment_recovery']:.2f}"
-        texts[f"{name}_sigma"] = f"{row['sigma_end']:.3f}"
-    for r in results["records"]:
-        if r["setting"] == 785 and r["seed"] == 0:
-            layer = r["layers"][0]
-            texts[f"gap_travel_{-r['rho_init']:g}"] = f"{layer['rho_travel_fraction']:.2f}"
-            texts[f"gap_rho_end_{-r['rho_init']:g}"] = f"{layer['end']['mean_rho']:.2f}"
-    texts["gap_steps"] = str(results["records"][0]["steps"])
+            mean, sem = getattr(row, key), getattr(row, f"{key}_sem")
+            texts[f"{name}_{key}"] = f"{100 * mean:.1f} ± {100 * sem:.1f} %"
+        texts[f"{name}_recovery"] = f"{row.moment_recovery:.2f}"
+        texts[f"{name}_sigma"] = f"{row.sigma_end:.3f}"
+    for r in results.records:
+        if r.setting == 785 and r.seed == 0:
+            layer = r.layers[0]
+            texts[f"gap_travel_{-r.rho_init:g}"] = f"{layer.rho_travel_fraction:.2f}"
+            texts[f"gap_rho_end_{-r.rho_init:g}"] = f"{layer.end.mean_rho:.2f}"
+    texts["gap_steps"] = str(results.records[0].steps)
     return texts
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 4 glues of the moment-matched mean network (``mean_gap``)."""
-    return mean_gap(records("mean_gap")["results"])
+    return mean_gap(records("mean_gap").results)
 
 
-def mean_gap_table(results: dict) -> pd.DataFrame:
+def mean_gap_table(results: "MeanGapResults") -> pd.DataFrame:
     """The mean network's gap (``sgb.experiments.mean_gap``), one row per cell (hidden
     types, rho start): compression both ways, seeds, and means ± SEM over seeds of the test
     accuracy (%) of the individuals, their mean network and the moment-matched network, the
     gap individuals minus mean network (points), the trained sigma and the moment-matched
     network's recovery of that gap (a ratio)."""
+
+    def cell(mean: float, sem: float | None, scale: float, decimals: int) -> str:
+        return mean_sem(mean, math.nan if sem is None else sem, scale, decimals)
+
     return pd.DataFrame(
         {
-            "hidden types": s["setting"],
-            "rho start": s["rho_init"],
-            "compression (ours)": s["compression"],
-            "compression (authors')": s["compression_authors"],
-            "seeds": s["n"],
-            "individuals %": mean_sem(s["accuracy"], s["accuracy_sem"], 100.0, 1),
-            "mean network %": mean_sem(s["mean_network"], s["mean_network_sem"], 100.0, 1),
-            "moment-matched %": mean_sem(s["moment_network"], s["moment_network_sem"], 100.0, 1),
-            "gap (points)": mean_sem(s["gap"], s["gap_sem"], 100.0, 1),
-            "trained sigma": mean_sem(s["sigma_end"], s["sigma_end_sem"], 1.0, 4),
-            "recovery": mean_sem(s["moment_recovery"], s["moment_recovery_sem"], 1.0, 2),
+            "hidden types": s.setting,
+            "rho start": s.rho_init,
+            "compression (ours)": s.compression,
+            "compression (authors')": s.compression_authors,
+            "seeds": s.n,
+            "individuals %": cell(s.accuracy, s.accuracy_sem, 100.0, 1),
+            "mean network %": cell(s.mean_network, s.mean_network_sem, 100.0, 1),
+            "moment-matched %": cell(s.moment_network, s.moment_network_sem, 100.0, 1),
+            "gap (points)": cell(s.gap, s.gap_sem, 100.0, 1),
+            "trained sigma": cell(s.sigma_end, s.sigma_end_sem, 1.0, 4),
+            "recovery": cell(s.moment_recovery, s.moment_recovery_sem, 1.0, 2),
         }
-        for s in results["summary"]
+        for s in results.summary
     )
 
 
@@ -333,21 +348,30 @@ class MeanGapRecord(Record):
 
 
 class MeanGapSummary(Record):
-    """Per setting: the individuals' accuracy and the two networks', each with its SEM."""
+    """Per setting: the individuals' accuracy and the two networks', the gap, the trained
+    sigma and the recovery, each with its SEM (null with one seed)."""
 
     setting: Count
     rho_init: Finite
+    compression: Compression
+    compression_authors: Compression
+    n: Count
     moment_recovery: Finite
     sigma_end: NonNegative
     accuracy: Accuracy
     mean_network: Accuracy
     moment_network: Accuracy
-    accuracy_sem: NonNegative
-    mean_network_sem: NonNegative
-    moment_network_sem: NonNegative
+    gap: Finite
+    accuracy_sem: NonNegative | None
+    mean_network_sem: NonNegative | None
+    moment_network_sem: NonNegative | None
+    gap_sem: NonNegative | None
+    sigma_end_sem: NonNegative | None
+    moment_recovery_sem: NonNegative | None
 
 
 class MeanGapResults(Record):
+    dataset: str
     records: List[MeanGapRecord]
     summary: List[MeanGapSummary]
 

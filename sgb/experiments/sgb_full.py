@@ -43,7 +43,6 @@ from sgb.schemas import (
     Accuracy,
     Compression,
     Each,
-    Finite,
     List,
     NonNegative,
     Provenance,
@@ -55,6 +54,7 @@ from sgb.supervised import ClassifierConfig
 from sgb.supervised_sweep import (
     IMAGE_RATIOS,
     CompressionSweep,
+    SweepRecord,
     figure2_records,
     run_one,
     sweep_cells,
@@ -171,7 +171,9 @@ SGB_VARIANTS = {
 }
 
 
-def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str) -> list[Row]:
+def figure2_full_rows(
+    sgb_full: "SgbFullResults", dgb_full: Record, rounds: int, dataset: str
+) -> list[Row]:
     """'The SGB is better at high compression' at the authors' budgets: at every ratio
     where at least 2 seeds of the authors' DGB layout trained all ``rounds``
     (``sgb.experiments.dgb_full``), against each SGB variant of ``sgb.experiments.
@@ -181,12 +183,12 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
     dgb_records = figure2_records(dgb_full, rounds)
     dgb = accuracies(dgb_records, "dgb", min_seeds=2)
     targets = {  # each ratio's key as accuracies computes it, to its target ratio
-        float(np.mean([c["compression"] for c in dgb_records if c["setting"] == s])): s
-        for s in {c["setting"] for c in dgb_records}
+        float(np.mean([c.compression for c in dgb_records if c.setting == s])): s
+        for s in {c.setting for c in dgb_records}
     }
     rows = []
-    for variant in sgb_full["variants"]:
-        records = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
+    for variant in sgb_full.variants:
+        records = [c for c in sgb_full.cells.values() if c.variant == variant]
         sgb = accuracies(records, "sgb", min_seeds=2)
         for ratio_s, ratio_d in nearest_pairs(sgb, dgb):
             test = stats.welch(100 * sgb[ratio_s], 100 * dgb[ratio_d])
@@ -203,12 +205,14 @@ def figure2_full_rows(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str)
     return rows
 
 
-def figure2_full_crossover(sgb_full: dict, dgb_full: dict, rounds: int, dataset: str) -> list[Row]:
+def figure2_full_crossover(
+    sgb_full: "SgbFullResults", dgb_full: Record, rounds: int, dataset: str
+) -> list[Row]:
     """``crossover_row`` at the authors' budgets (the results of ``sgb.experiments.
     sgb_full`` and ``dgb_full``), for the SGB as the authors train it, over the ratios
     where at least 2 seeds finished, under each count of compression; none before two DGB
     ratios have."""
-    cells = [c for c in sgb_full["cells"].values() if c["variant"] == "authors"]
+    cells = [c for c in sgb_full.cells.values() if c.variant == "authors"]
     dgb_records = figure2_records(dgb_full, rounds)
     rows = []
     for count, words in COUNTS.items():
@@ -225,21 +229,21 @@ def figure2_full_crossover(sgb_full: dict, dgb_full: dict, rounds: int, dataset:
     return rows
 
 
-def supervised_population_rows(sgb_full: dict, dataset: str) -> list[Row]:
+def supervised_population_rows(sgb_full: "SgbFullResults", dataset: str) -> list[Row]:
     """The abstract's population against its mean network on ``dataset`` (the results of
     ``sgb.experiments.sgb_full``), per KL counting (the authors' per synapse, and per type
     pair) and ratio with 2 seeds or more: the individuals' mean test accuracy minus the mean
     network's, paired by seed, in points."""
     rows = []
     for variant in ("authors", "per_pair"):
-        cells = [c for c in sgb_full["cells"].values() if c["variant"] == variant]
-        for setting in sorted({c["setting"] for c in cells}, reverse=True):
-            seeds = sorted((c for c in cells if c["setting"] == setting), key=lambda c: c["seed"])
+        cells = [c for c in sgb_full.cells.values() if c.variant == variant]
+        for setting in sorted({c.setting for c in cells}, reverse=True):
+            seeds = sorted((c for c in cells if c.setting == setting), key=lambda c: c.seed)
             if len(seeds) < 2:
                 continue
-            ratio = np.mean([c["compression"] for c in seeds])
+            ratio = np.mean([c.compression for c in seeds])
             test = stats.paired(
-                [100 * c["accuracy"] for c in seeds], [100 * c["mean_network"] for c in seeds]
+                [100 * c.accuracy for c in seeds], [100 * c.mean_network for c in seeds]
             )
             rows.append(
                 judge(
@@ -252,31 +256,31 @@ def supervised_population_rows(sgb_full: dict, dataset: str) -> list[Row]:
     return rows
 
 
-def kl_share_row(sgb_full: dict, dgb_budget: dict, dataset: str) -> Row | None:
+def kl_share_row(sgb_full: "SgbFullResults", dgb_budget: Record, dataset: str) -> Row | None:
     """Section 2.1's explanation of the DGB's lead at low compression, the KL term, at the
     authors' budgets: the SGB with its KL counted once per type pair (a weaker KL, so smaller
     spreads) minus the authors' SGB (per synapse) at the lowest ratio, Welch's t over seeds
     in points, against the DGB's whole lead there (``sgb.experiments.dgb_budget``: one seed,
     500 rounds, the network of best validation accuracy), which the KL would account for.
     ``None`` before both variants have 2 seeds at that ratio."""
-    lowest = max(c["setting"] for c in sgb_full["cells"].values())
+    lowest = max(c.setting for c in sgb_full.cells.values())
     of = {
-        v: [c for c in sgb_full["cells"].values() if c["variant"] == v and c["setting"] == lowest]
+        v: [c for c in sgb_full.cells.values() if c.variant == v and c.setting == lowest]
         for v in ("per_pair", "authors")
     }
     if min(len(cells) for cells in of.values()) < 2:
         return None
-    per_pair, authors = (np.array([100 * c["accuracy"] for c in of[v]]) for v in of)
-    dgb = 100 * dgb_budget["records"][-1]["test_accuracy"]
+    per_pair, authors = (np.array([100 * c.accuracy for c in of[v]]) for v in of)
+    dgb = 100 * dgb_budget.records[-1].test_accuracy
     lead = dgb - authors.mean()
-    ratio = np.mean([c["compression"] for c in of["authors"]])
+    ratio = np.mean([c.compression for c in of["authors"]])
     return judge(
         "fig2.kl_explains_low",
         f"{dataset} at {ratio:.0f}x: the KL per type pair against per synapse (the authors'); "
         f"the DGB {dgb:.1f} % against the authors' SGB {authors.mean():.1f} %",
         stats.welch(per_pair, authors),
         f"{min(per_pair.size, authors.size)} seeds; SGB {FULL_EPOCHS} epochs; the DGB one "
-        f"seed of {dgb_budget['records'][-1]['rounds']} rounds",
+        f"seed of {dgb_budget.records[-1].rounds} rounds",
         FULL_EPOCHS,
         paper_effect=float(lead),
         basis="the DGB's whole lead over the authors' SGB there, which the KL would account "
@@ -285,22 +289,22 @@ def kl_share_row(sgb_full: dict, dgb_budget: dict, dataset: str) -> Row | None:
 
 
 def sgb_variant_tests(
-    sgb_full: dict, variant: str, baseline: str = "authors", score: str = "accuracy"
+    sgb_full: "SgbFullResults", variant: str, baseline: str = "authors", score: str = "accuracy"
 ) -> pd.DataFrame:
     """How much one change of the SGB's training moves Figure 2: ``variant`` minus
     ``baseline`` (``welch_table``; variants of ``sgb.experiments.sgb_full``, whose results
     are ``sgb_full``) at every ratio where both have 2 seeds or more, in the individuals'
     accuracy (``score="accuracy"``) or the mean network's (``"mean_network"``)."""
-    cells = sgb_full["cells"].values()
+    cells = sgb_full.cells.values()
     of = {
-        name: accuracies([c for c in cells if c["variant"] == name], "sgb", 2, score)
+        name: accuracies([c for c in cells if c.variant == name], "sgb", 2, score)
         for name in (variant, baseline)
     }
     pairs = [(v, b) for b, v in nearest_pairs(of[baseline], of[variant])]
     return welch_table(of[variant], of[baseline], pairs, (variant, baseline))
 
 
-def sgb_full(payload: Payload | None) -> dict[str, str]:
+def sgb_full(payload: "SgbFull | None") -> dict[str, str]:
     """Figure 2's SGB as the paper and the authors train it (``sgb_full_*_cpu.json``): how
     many of its cells are committed (``full_status``), the authors' variant's individuals
     and mean network at its lowest compression (``full_low``: mean over its seeds, %), the
@@ -315,24 +319,22 @@ def sgb_full(payload: Payload | None) -> dict[str, str]:
     texts = dict.fromkeys(names + shifts, NOT_RUN)
     if payload is None:
         return texts
-    results = payload["results"]
-    cells = list(results["cells"].values())
-    config = payload["provenance"]["config"]
-    planned = (
-        len(config["variants"]) * len(config["sweep"]["ratios"]) * len(config["sweep"]["seeds"])
-    )
+    results = payload.results
+    cells = list(results.cells.values())
+    config = payload.provenance.config
+    planned = len(config.variants) * len(config.sweep.ratios) * len(config.sweep.seeds)
     texts["full_status"] = f"{len(cells)} of its {planned} cells"
     for variant, name in (("authors", "full_sigma"), ("rho_ours", "full_rho_sigma")):
-        sigma = [c["layers"][0]["mean_sigma"] for c in cells if c["variant"] == variant]
+        sigma = [c.layers[0].mean_sigma for c in cells if c.variant == variant]
         if sigma:
             texts[name] = f"{min(sigma):.3f} to {max(sigma):.3f}"
-    authors = [c for c in cells if c["variant"] == "authors"]
+    authors = [c for c in cells if c.variant == "authors"]
     if authors:
-        low = min(c["compression"] for c in authors)
-        at_low = [c for c in authors if c["compression"] == low]
+        low = min(c.compression for c in authors)
+        at_low = [c for c in authors if c.compression == low]
         texts["full_low"] = (
-            f"{100 * np.mean([c['accuracy'] for c in at_low]):.1f} % for the individuals and "
-            f"{100 * np.mean([c['mean_network'] for c in at_low]):.1f} % for the mean network "
+            f"{100 * np.mean([c.accuracy for c in at_low]):.1f} % for the individuals and "
+            f"{100 * np.mean([c.mean_network for c in at_low]):.1f} % for the mean network "
             f"at {low:.0f}x ({len(at_low)} seed{'s' if len(at_low) > 1 else ''})"
         )
     pair, rho = (sgb_variant_tests(results, v) for v in ("per_pair", "rho_ours"))
@@ -353,15 +355,16 @@ def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
     finished (``full_dgb_status``) and, at each of its planned ratios r, the scorecard row
     of the SGB as the authors train it against it (``full{r}_verdict``, ``_ours``,
     ``_detectable``, ``_decide``; ``row_texts``), and the crossover's rows under our count
-    of compression (``full_cross``) and the authors' (``full_cross_theirs``)."""
+    of compression (``full_cross``) and the authors' (``full_cross_theirs``);
+    ``dgb_payload``: ``sgb.experiments.dgb_full``'s file."""
     if dgb_payload is None:
         return {"full_dgb_status": NOT_RUN}
-    config = dgb_payload["provenance"]["config"]
-    planned = len(config["ratios"]) * len(config["seeds"])
-    finished = len(figure2_records(dgb_payload["results"], config["dgb"]["rounds"]))
+    config = dgb_payload.provenance.config
+    planned = len(config.ratios) * len(config.seeds)
+    finished = len(figure2_records(dgb_payload.results, config.dgb.rounds))
     texts = {"full_dgb_status": f"{finished} of its {planned} cells"}
     authors = SGB_VARIANTS["authors"]
-    for ratio in config["ratios"]:
+    for ratio in config.ratios:
         row = row_of(card, "fig2.full.sgb_better_high", f"(target {ratio:g}x), the SGB ({authors})")
         texts |= row_texts(f"full{ratio:.0f}", row)
     for variant in SGB_VARIANTS:
@@ -452,14 +455,12 @@ def evidence(records: Records) -> list[Row]:
     sgb, dgb = records.get("sgb_full"), records.get("dgb_full")
     if sgb is None or dgb is None:
         return []
-    rounds = dgb["provenance"]["config"]["dgb"]["rounds"]
-    rows = figure2_full_rows(sgb["results"], dgb["results"], rounds, BOOK_DATASET)
-    rows += figure2_full_crossover(sgb["results"], dgb["results"], rounds, BOOK_DATASET)
-    rows += supervised_population_rows(sgb["results"], BOOK_DATASET)
+    rounds = dgb.provenance.config.dgb.rounds
+    rows = figure2_full_rows(sgb.results, dgb.results, rounds, BOOK_DATASET)
+    rows += figure2_full_crossover(sgb.results, dgb.results, rounds, BOOK_DATASET)
+    rows += supervised_population_rows(sgb.results, BOOK_DATASET)
     budget = records.get("dgb_budget")
-    share = (
-        None if budget is None else kl_share_row(sgb["results"], budget["results"], BOOK_DATASET)
-    )
+    share = None if budget is None else kl_share_row(sgb.results, budget.results, BOOK_DATASET)
     return rows + ([share] if share else [])
 
 
@@ -473,7 +474,7 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     )
 
 
-def sgb_full_table(payload: Payload) -> pd.DataFrame:
+def sgb_full_table(payload: "SgbFull") -> pd.DataFrame:
     """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``),
     one row per variant and number of hidden types, over the seeds finished: compression
     under both conventions, the seeds, the test accuracy (%) of the individuals (mean over
@@ -481,16 +482,16 @@ def sgb_full_table(payload: Payload) -> pd.DataFrame:
     trained sigma of each layer (its synapses' mean, mean over seeds)."""
     cells = pd.DataFrame(
         {
-            "variant": r["variant"],
-            "hidden types": r["setting"],
-            "compression (ours)": r["compression"],
-            "compression (authors')": r["compression_authors"],
-            "seed": r["seed"],
-            "individuals %": 100 * r["accuracy"],
-            "mean network %": 100 * r["mean_network"],
-            **{f"sigma, layer {i}": layer["mean_sigma"] for i, layer in enumerate(r["layers"])},
+            "variant": r.variant,
+            "hidden types": r.setting,
+            "compression (ours)": r.compression,
+            "compression (authors')": r.compression_authors,
+            "seed": r.seed,
+            "individuals %": 100 * r.accuracy,
+            "mean network %": 100 * r.mean_network,
+            **{f"sigma, layer {i}": layer.mean_sigma for i, layer in enumerate(r.layers)},
         }
-        for r in payload["results"]["cells"].values()
+        for r in payload.results.cells.values()
     )
     sigmas = [c for c in cells.columns if c.startswith("sigma")]
     how = {
@@ -514,19 +515,14 @@ class MeanSigma(Record):
     mean_sigma: NonNegative
 
 
-class SgbFullCell(Record):
+class SgbFullCell(SweepRecord):
     variant: str
-    model: str
-    setting: Finite
-    seed: Seed
-    accuracy: Accuracy
     mean_network: Accuracy
-    compression: Compression
-    compression_authors: Compression
     layers: List[MeanSigma]
 
 
 class SgbFullResults(Record):
+    dataset: str
     cells: Each(SgbFullCell)
     variants: dict[str, Any]
 
