@@ -697,9 +697,9 @@ def variability_row(normal: Record, setting: str, key: str = "title.variability"
     from the ICC's (``between_sd_at``), its p the one-way F-test's, its detectable effect
     that test's at 80 % power (``detectable_between_sd``); against about 1 % of the return,
     what the authors' plot data imply. Where that cannot be decided, the episodes per
-    individual that would; ``normal``: a genome's summary of the normal body (a
-    ``sgb.experiments.populations.PopulationNormal``). ``None`` for
-    a genome whose mean return is not positive."""
+    individual that would. ``normal``: a genome's summary of the normal body (a
+    ``sgb.experiments.populations.PopulationNormal``); ``None`` for a genome whose mean
+    return is not positive."""
     split, mean = normal.variance_split, normal.mean_return
     if mean <= 0:
         return None
