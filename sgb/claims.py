@@ -15,7 +15,7 @@ contradiction and to size the budget is stated in the row (``Row.basis``).
 
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -29,6 +29,7 @@ from sgb.reliability import (
     episodes_to_detect,
     variance_split,
 )
+from sgb.schemas import Record, ResultsFile, StoredTest, Training
 
 if TYPE_CHECKING:
     from sgb.supervised_sweep import SweepRecord
@@ -602,14 +603,20 @@ def crossover_row(
 # Figure 3 ---------------------------------------------------------------------------------
 
 
-def run_returns(runs: list[dict], settings: str, k: int | None, score: str) -> np.ndarray:
-    """The ``score`` of every run at ``settings`` and ``k`` cell types (vanilla: ``None``,
-    trained once, under ``"ours"``): ``"final_return"``, the last evaluation, or
-    ``"last_two_return"``, the mean of the last two."""
-    chosen = [r for r in runs if r["cell_types"] == k and (k is None or r["settings"] == settings)]
+def run_returns(
+    runs: Sequence[Training],
+    settings: str,
+    k: int | None,
+    score: str,
+    settings_of: Callable[[Training], str] = lambda r: r.settings,
+) -> np.ndarray:
+    """The ``score`` of every run at ``settings`` (``settings_of`` a run) and ``k`` cell
+    types (vanilla: ``None``, trained once, under ``"ours"``): ``"final_return"``, the last
+    evaluation, or ``"last_two_return"``, the mean of the last two."""
+    chosen = [r for r in runs if r.cell_types == k and (k is None or settings_of(r) == settings)]
     if score == "last_two_return":
-        return np.array([np.mean(r["eval_returns"][-2:]) for r in chosen])
-    return np.array([r[score] for r in chosen])
+        return np.array([np.mean(r.eval_returns[-2:]) for r in chosen])
+    return np.array([getattr(r, score) for r in chosen])
 
 
 FIG3_SETTINGS = {"ours": "our genome", "authors": "the authors' genome"}
@@ -620,27 +627,28 @@ REGIME_SETTINGS = {
 
 
 def figure3_rows(
-    results: dict,
+    runs: Sequence[Training],
     env: str,
     steps: int,
     score: str = "last_two_return",
     settings_labels: dict[str, str] = FIG3_SETTINGS,
     key_infix: str = "",
+    settings_of: Callable[[Training], str] = lambda r: r.settings,
 ) -> list[Row]:
     """Figure 3C/D's level at 128 types and fall near 16, per genome settings named in
-    ``settings_labels``, as fractions of the mean vanilla return (each run scored by
-    ``score``); keys ``fig3.level_128.{key_infix}{env}`` and ``fig3.fall_16...``."""
-    runs = results["runs"]
-    vanilla = run_returns(runs, "ours", None, score)
+    ``settings_labels`` (``settings_of`` a run), as fractions of the mean vanilla return
+    (each run scored by ``score``); keys ``fig3.level_128.{key_infix}{env}`` and
+    ``fig3.fall_16...``."""
+    vanilla = run_returns(runs, "ours", None, score, settings_of)
     scale = vanilla.mean() if vanilla.size else math.nan
     budget_of = f"{steps / 1e6:g}M steps, seeds: vanilla {vanilla.size}"
     rows = []
-    for settings in dict.fromkeys(r["settings"] for r in runs if r["cell_types"] is not None):
+    for settings in dict.fromkeys(settings_of(r) for r in runs if r.cell_types is not None):
         if settings not in settings_labels:
             continue
         top, bottom = (
-            run_returns(runs, settings, 128, score),
-            run_returns(runs, settings, 16, score),
+            run_returns(runs, settings, 128, score, settings_of),
+            run_returns(runs, settings, 16, score, settings_of),
         )
         label = f"{env}, {settings_labels[settings]}"
         budget = f"{budget_of}, 128 types {top.size}, 16 types {bottom.size}"
@@ -686,27 +694,28 @@ def episodes_to_decide(per_episode, effect: float) -> str:
     return f"{max(episodes, k)} episodes for each of {n} individuals"
 
 
-def variability_row(summary: dict, setting: str, key: str = "title.variability") -> Row | None:
+def variability_row(normal: Record, setting: str, key: str = "title.variability") -> Row | None:
     """The title's claim on one genome: its individuals' innate returns on the normal body
     differ. The effect is the SD between individuals in % of the mean return, its interval
     from the ICC's (``between_sd_at``), its p the one-way F-test's, its detectable effect
     that test's at 80 % power (``detectable_between_sd``); against about 1 % of the return,
     what the authors' plot data imply. Where that cannot be decided, the episodes per
-    individual that would. ``None`` for a genome whose mean return is not positive."""
-    normal = summary["normal"]
-    split, mean = normal["variance_split"], normal["mean_return"]
+    individual that would. ``normal``: a genome's summary of the normal body (a
+    ``sgb.experiments.populations.PopulationNormal``); ``None`` for a genome whose mean
+    return is not positive."""
+    split, mean = normal.variance_split, normal.mean_return
     if mean <= 0:
         return None
-    n, k, within = split["n_individuals"], split["episodes"], split["within_var"]
+    n, k, within = split.n_individuals, split.episodes, split.within_var
     percent = 100 / mean
-    low, high = (between_sd_at(icc, within) * percent for icc in split["icc_ci"])
+    low, high = (between_sd_at(icc, within) * percent for icc in split.icc_ci)
     test = stats.Test(
         "one-way F, SD between individuals",
-        normal["between_sd"] * percent,
+        normal.between_sd * percent,
         low,
         high,
         math.nan,
-        split["p"],
+        split.p,
         detectable_between_sd(n, k, math.sqrt(within)) * percent,
         n,
     )
@@ -745,21 +754,29 @@ def sd_below(bound: float) -> str:
     )
 
 
-def stored_test(stored: dict, scale: float = 1.0) -> stats.Test:
+def stored_test(stored: StoredTest, scale: float = 1.0) -> stats.Test:
     """A ``stats.Test`` read back from a results file (``null`` dof: a normal test), its
     estimate, interval and detectable effect multiplied by ``scale``."""
-    dof = math.inf if stored["dof"] is None else stored["dof"]
-    scaled = {k: scale * stored[k] for k in ("estimate", "low", "high", "detectable")}
-    return stats.Test(stored["name"], dof=dof, p=stored["p"], n=stored["n"], **scaled)
+    dof = math.inf if stored.dof is None else stored.dof
+    return stats.Test(
+        stored.name,
+        scale * stored.estimate,
+        scale * stored.low,
+        scale * stored.high,
+        dof,
+        stored.p,
+        scale * stored.detectable,
+        stored.n,
+    )
 
 
 # The scorecard ----------------------------------------------------------------------------
 
 
-def trained_steps(payload: dict | None) -> int | None:
+def trained_steps(payload: ResultsFile | None) -> int | None:
     """The environment steps of the PPO runs of a results file (its config's
     ``ppo.total_steps``), or None without the file."""
-    return None if payload is None else payload["provenance"]["config"]["ppo"]["total_steps"]
+    return None if payload is None else payload.provenance.config.ppo.total_steps
 
 
 def genomes_at(rows: list[Row], steps: float | None) -> list[Row]:

@@ -11,6 +11,7 @@ from sgb.experiments import (
     bet_hedging,
     evolution,
     fig2,
+    fig3,
     innate_start,
     innate_start_supervised,
 )
@@ -27,7 +28,7 @@ from sgb.reliability import (
 )
 
 
-def _sweep(fall: float, seeds: int, rng) -> dict:
+def _sweep(fall: float, seeds: int, rng) -> list:
     """Synthetic Figure 3 runs: vanilla at 4000, 128 types at 3000, 16 at 3000 - fall x
     4000, seed SD 400."""
     runs = []
@@ -40,10 +41,12 @@ def _sweep(fall: float, seeds: int, rng) -> dict:
                     "cell_types": k,
                     "seed": seed,
                     "final_return": value,
+                    "last_two_return": value,
+                    "eval_steps": [0, 1, 2],
                     "eval_returns": [value / 2, value, value],
                 }
             )
-    return {"env": "ant", "runs": runs}
+    return [fig3.Fig3Run.model_validate(r) for r in runs]
 
 
 def test_figure3_verdicts_on_sweeps_with_known_falls():
@@ -107,7 +110,9 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
                 "parts": {k: {"returns": v.tolist()} for k, v in parts.items()},
             }
     config = populations.populations_config("cpu")
-    results = populations.summarise({"genomes": genomes}, config)
+    summarised = populations.summarise({"genomes": genomes}, config)
+    stored = json.loads(json.dumps(_jsonable(summarised)))
+    results = populations.PopulationsResults.model_validate(stored)
     rows = {(r.key, r.setting.split(",")[1]): r for r in population_runs.populations_rows(results)}
     for who in (" our genome", " the authors' genome"):
         assert rows["fig5.population_beats_mean", who].verdict in verdicts.IN_DIRECTION
@@ -135,7 +140,9 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     genome = {"training_seed": 0, "parts": {k: {"returns": v.tolist()} for k, v in parts.items()}}
     genome["summary"] = populations.genome_summary(parts)
     stored = json.loads(json.dumps(_jsonable({"genomes": {"regime": genome}})))
-    rows = population_runs.regime_population_rows(stored)
+    rows = population_runs.regime_population_rows(
+        populations.RegimePopulationsResults.model_validate(stored)
+    )
     fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
     assert fig5[0].verdict in verdicts.IN_DIRECTION
     assert fig5[0].test.estimate == pytest.approx(5.0, abs=0.5)  # % of the mean network
@@ -419,17 +426,17 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
     assert rows["digits, from individual, after one epoch"].verdict == verdicts.CONTRADICTED
 
 
-def _population_summary(rng, mean: float, between_sd: float, within_sd: float, k: int) -> dict:
-    """A populations summary (its normal body) of 100 simulated individuals x k episodes."""
+def _population_summary(rng, mean: float, between_sd: float, within_sd: float, k: int):
+    """A populations summary's normal body of 100 simulated individuals x k episodes."""
     x = mean + rng.normal(0, between_sd, (100, 1)) + rng.normal(0, within_sd, (100, k))
     split = variance_split(x)
-    return {
-        "normal": {
-            "mean_return": float(x.mean()),
-            "variance_split": split._asdict(),
-            "between_sd": float(np.sqrt(split.between_var)),
-        }
+    normal = {
+        "mean_return": float(x.mean()),
+        "variance_split": split._asdict(),
+        "between_sd": float(np.sqrt(split.between_var)),
     }
+    stored = json.loads(json.dumps(_jsonable(normal)))
+    return population_runs.PopulationNormal.model_validate(stored)
 
 
 def test_the_variability_row_finds_individuals_that_differ_and_rules_out_clones():

@@ -10,6 +10,7 @@ import matplotlib
 import numpy as np
 import pytest
 
+from sgb.experiments import rl_spread
 from sgb.plots import (
     COLUMN_IN,
     MIN_FONT_PT,
@@ -23,6 +24,7 @@ from sgb.plots import (
     theory,
     wiring,
 )
+from sgb.schemas import BenchBackendsResults
 
 matplotlib.use("agg")
 
@@ -122,16 +124,23 @@ RNG = np.random.default_rng(0)
 MU, SIGMA = RNG.normal(size=(3, 2)), np.abs(RNG.normal(size=(3, 2)))
 THEORY = _theory_results(RNG)
 SPREAD = [
-    {"sigma_init": s, "advantage": 1.0, "sem_advantage": 0.1}
-    | {"individuals_sd": 2.0, "sem_individuals_sd": 0.2}
+    rl_spread.SpreadSummary.model_validate(
+        {"rho_init": float(np.log(np.expm1(s))), "sigma_init": s, "sigma_trained": s}
+        | {"advantage": 1.0, "sem_advantage": 0.1, "mean_network_mean": 1e3, "n_seeds": 3}
+        | {"individuals_sd": 2.0, "sem_individuals_sd": 0.2}
+    )
     for s in (0.01, 0.1, 1.0)
 ]
-BENCH = {
-    "env": "halfcheetah",
-    "throughput_steps": 100_000,
-    "throughput": {b: {"train_steps_per_s": 1e4} for b in ("generalized", "mjx")},
-    "reach": {"backend": "mjx", "eval_steps": [0, 1e6], "eval_returns": [0.0, 1e3]},
-}
+SPEED = {"train_steps_per_s": 1e4, "wall_time_s": 10.0}
+BENCH = BenchBackendsResults.model_validate(
+    {
+        "env": "halfcheetah",
+        "throughput_steps": 100_000,
+        "throughput": {b: SPEED for b in ("spring", "mjx")},
+        "reach": {"backend": "mjx", "eval_steps": [0, 1_000_000], "eval_returns": [0.0, 1e3]}
+        | SPEED,
+    }
+)
 SUMMARY = {"median_ratio": 0.95, "log_correlation": 0.91}
 LAYER = {k: np.abs(RNG.normal(size=12)) for k in ("sigma2", "curvature", "curvature_population")}
 FIXED = [
@@ -170,7 +179,9 @@ FIGURES = {
     "beyond.plot_condition_returns": lambda: beyond.plot_condition_returns(GENOME),
     "rl.plot_spread": lambda: rl.plot_spread(SPREAD),
     "rl.plot_backends": lambda: rl.plot_backends(BENCH),
-    "rl.plot_mean_network": lambda: rl.plot_mean_network(RETURNS),
+    "rl.plot_mean_network": lambda: rl.plot_mean_network(
+        RETURNS["normal"]["individuals"], RETURNS["normal"]["mean_network"]
+    ),
     "rl.show_images": lambda: rl.show_images(FRAMES),
 }
 

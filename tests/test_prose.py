@@ -78,14 +78,14 @@ def test_missing_rows_and_files_give_the_fallback_texts():
 
 def test_the_texts_are_the_files_values():
     regime = RECORDS("regime")
-    vanilla = [r for r in regime["results"]["runs"] if r["cell_types"] is None]
+    vanilla = [r for r in regime.results.runs if r.cell_types is None]
     texts = regime_runs.regime(regime)
-    mean = np.mean([r["final_return"] for r in vanilla])
+    mean = np.mean([r.final_return for r in vanilla])
     assert texts["regime_vanilla"].startswith(f"{mean:.0f}")
     assert texts["regime_vanilla"].endswith(f"over {len(vanilla)} seed" + "s" * (len(vanilla) > 1))
-    wall = np.mean([r["wall_time_s"] for r in vanilla])
+    wall = np.mean([r.wall_time_s for r in vanilla])
     assert texts["regime_wall"] == f"{wall / 3600:.1f} h"
-    assert texts["regime_steps"] == f"{int(vanilla[0]['eval_steps'][-1]):,}"  # all digits
+    assert texts["regime_steps"] == f"{int(vanilla[0].eval_steps[-1]):,}"  # all digits
     bench = RECORDS("bench_backends")["results"]["throughput"]
     ratio = bench["mjx"]["train_steps_per_s"] / bench["spring"]["train_steps_per_s"]
     assert prose.backends(RECORDS("bench_backends"))["mjx_vs_spring"] == (f"{ratio:.2f}x")
@@ -155,7 +155,7 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
     both = {**regime, "results": {**regime["results"], "runs": runs_of_seed0 + second}}
     both = regime_runs.Regime.model_validate(both)
     steps = regime["provenance"]["config"]["ppo"]["total_steps"]
-    (level,) = regime_runs.regime_rows(both["results"], steps)
+    (level,) = regime_runs.regime_rows(both.results.runs, steps)
     texts = regime_runs.regime(both)
     assert texts["regime_level"] == f"{level.ours}, **{level.verdict}**"
     assert texts["regime_fall"].startswith("no row yet")
@@ -181,8 +181,9 @@ def test_the_peer_texts_set_the_authors_run_against_the_interval_of_ours():
         return [{"label": label, "eval_steps": steps, "eval_returns": [0.0, 0.0, x]} for x in last]
 
     runs = run("vanilla", [250.0, 300.0, 350.0]) + run("k64_aliased", [-100.0, -90.0, -110.0])
-    payload = {"results": {"comparison": regime_peer.compare(runs)}}
-    texts = regime_peer.regime_peer(payload)
+    results = {"env": "ant", "runs": [], "comparison": regime_peer.compare(runs)}
+    stored = json.loads(json.dumps(results))  # as the file holds it: the interval a list
+    texts = regime_peer.regime_peer(regime_peer.RegimePeerResults.model_validate(stored))
     assert texts["peer_vanilla_ours"].startswith("250, 300, 350 at 1,638,400 steps (mean 300")
     assert (texts["peer_vanilla_theirs"], texts["peer_vanilla_inside"]) == ("279.8", "inside")
     assert (texts["peer_aliased_theirs"], texts["peer_aliased_inside"]) == ("-351.2", "outside")
@@ -194,10 +195,12 @@ def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
     speed is not counted as walking."""
 
     def run(k, seed, speed):
-        return {"cell_types": k, "seed": seed, "forward_velocity": speed, "walks": speed >= 1}
+        walked = {"cell_types": k, "seed": seed, "forward_velocity": speed, "walks": speed >= 1}
+        return walked | {"genome": "authors", "window_return": 1000.0, "forward_velocity_sem": 0.1}
 
     runs = [run(16, 0, 0.4), run(None, 1, 7.0), run(128, 0, 8.0), run(None, 0, 7.5)]
-    texts = regime_gait.regime_gait({"results": {"walking_speed": 1.0, "runs": runs}})
+    results = regime_gait.RegimeGaitResults.model_validate({"walking_speed": 1.0, "runs": runs})
+    texts = regime_gait.regime_gait(results)
     assert texts["gait_runs"] == (
         "vanilla 7.50, 7.00 m/s (seeds 0, 1); 128 types 8.00 m/s (seed 0); "
         "16 types 0.40 m/s (seed 0)"

@@ -165,9 +165,10 @@ def test_spread_summary_pairs_each_seed_with_its_own_mean_network():
     assert narrow["n_seeds"] == 3 and wide["n_seeds"] == 2
     assert wide["advantage"] == -7.5 and np.isclose(wide["sem_advantage"], 2.5)
     for r, t in zip(runs, (0.5, -1.25, 2.0, -3.0, -4.0), strict=True):
-        r["paired_test"] = {"t": t}
+        r |= {"checkpoint": "", "paired_test": {"t": t, "p": 0.5}}
     runs[-1]["sigma_trained"] = 0.19  # the wide group's larger change: 0.19 against 0.127
-    prose = rl_spread.spread_prose(runs)
+    results = {"runs": runs, "summary": rl_spread.summarise_spread(runs)}  # as the file holds
+    prose = rl_spread.spread_prose(rl_spread.SpreadResults.model_validate(results))
     assert prose["spread0_advantage"] == "+5 ± 0" and prose["spread1_advantage"] == "-8 ± 2"
     assert prose["spread0_t"] == "+0.50, -1.25, +2.00" and prose["spread1_t"] == "-3.00, -4.00"
     assert prose["spread1_individuals"] == "42" and prose["spread1_mean_network"] == "50"

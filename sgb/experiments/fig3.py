@@ -18,7 +18,7 @@ from sgb.profiles import PROFILE_NAMES
 from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import read_results
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_scale, with_settings
@@ -138,10 +138,9 @@ def best_checkpoint(results_dir: Path, env: str = "ant") -> Path:
 FIG3_PROFILES = {p: {env: sweep_config(env, p) for env in BACKENDS} for p in PROFILE_NAMES}
 
 
-def typing_rows(results: dict, steps: int, score: str = "last_two_return") -> list[Row]:
+def typing_rows(runs: list["Fig3Run"], steps: int, score: str = "last_two_return") -> list[Row]:
     """Chapter 5's explanation of the fall at 16 types under the authors' genome: typing
     the observation entries. Each ablation swaps the input typing alone."""
-    runs = results["runs"]
     vanilla = run_returns(runs, "ours", None, score).mean()
     pairs = [
         ("authors_untyped_inputs", "authors", "the authors' genome, inputs untyped vs typed"),
@@ -179,15 +178,15 @@ def untrained_row(env: str, steps: int) -> Row:
     )
 
 
-def _trained(results: dict) -> bool:
+def _trained(results: "Fig3Results") -> bool:
     """Whether a Figure 3 sweep learned anything: vanilla's mean return above what an
     agent earns standing still or in place (1000 steps x the healthy reward 1 for the
     Ant; 0 for the HalfCheetah)."""
-    vanilla = [r["final_return"] for r in results["runs"] if r["cell_types"] is None]
-    return len(vanilla) >= 2 and np.mean(vanilla) > (1000 if results["env"] == "ant" else 100)
+    vanilla = [r.final_return for r in results.runs if r.cell_types is None]
+    return len(vanilla) >= 2 and np.mean(vanilla) > (1000 if results.env == "ant" else 100)
 
 
-def figure3(ant: Payload, cheetah: Payload, card: Card) -> dict[str, str]:
+def figure3(ant: "Fig3", cheetah: "Fig3", card: Card) -> dict[str, str]:
     """Figure 3 on both bodies: the sweeps' vanilla numbers (``ant_*``, ``hc_*``), the level
     and fall rows (``level_*``, ``fall_*``, ``cheetah_level_*``, ``cheetah_fall_*``) and the
     typing ablation (``typing_{authors,ours}_*``; "not yet run (fewer than 2 seeds)")."""
@@ -200,19 +199,19 @@ def figure3(ant: Payload, cheetah: Payload, card: Card) -> dict[str, str]:
     return texts
 
 
-def _vanilla(prefix: str, payload: Payload) -> dict[str, str]:
+def _vanilla(prefix: str, payload: "Fig3") -> dict[str, str]:
     """A Figure 3 sweep's steps per run (``{prefix}_steps``, millions), vanilla PPO's mean
     last-two return over its seeds (``_vanilla``), their number (``_vanilla_n``) and that
     mean on the authors' scale (``_vanilla_theirs``)."""
-    results = payload["results"]
-    vanilla = [r for r in results["runs"] if r["cell_types"] is None]
-    steps = payload["provenance"]["config"]["ppo"]["total_steps"]
-    mean = float(np.mean([r["last_two_return"] for r in vanilla]))
+    results = payload.results
+    vanilla = [r for r in results.runs if r.cell_types is None]
+    steps = trained_steps(payload)
+    mean = float(np.mean([r.last_two_return for r in vanilla]))
     return {
         f"{prefix}_steps": f"{steps / 1e6:g}M",
         f"{prefix}_vanilla": f"{mean:.0f}",
         f"{prefix}_vanilla_n": str(len(vanilla)),
-        f"{prefix}_vanilla_theirs": f"{authors_scale(results['env'], mean):.2f}",
+        f"{prefix}_vanilla_theirs": f"{authors_scale(results.env, mean):.2f}",
     }
 
 
@@ -240,12 +239,12 @@ def evidence(records: Records) -> list[Row]:
         if payload is None:
             continue
         steps = trained_steps(payload)
-        if not _trained(payload["results"]):
+        if not _trained(payload.results):
             rows.append(untrained_row(env, steps))
             continue
-        rows += figure3_rows(payload["results"], env, steps)
+        rows += figure3_rows(payload.results.runs, env, steps)
         if env == "ant":
-            rows += typing_rows(payload["results"], steps)
+            rows += typing_rows(payload.results.runs, steps)
     return rows
 
 
@@ -254,29 +253,29 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return figure3(records("fig3", "ant"), records("fig3", "halfcheetah"), card)
 
 
-def fig3_summary(payload: Payload) -> list[dict]:
+def fig3_summary(payload: "Fig3") -> list["Fig3Summary"]:
     """A Figure 3 sweep's summary rows (one per settings and cell types), scored by the
     mean of the last two evaluations where the file has that score, else by the last."""
-    results = payload["results"]
-    return results.get("summary_last_two", results["summary"])
+    results = payload.results
+    return results.summary if results.summary_last_two is None else results.summary_last_two
 
 
-def fig3_seeds(payload: Payload) -> list[dict]:
+def fig3_seeds(payload: "Fig3") -> list[dict]:
     """Each SGB run of a Figure 3 sweep as a fraction of the mean vanilla return, scored as
     ``fig3_summary`` scores it (the mean of the last two evaluations where the file has that
     summary): settings, cell types, seed and fraction; their means are the summary's."""
-    results = payload["results"]
-    score = "last_two_return" if "summary_last_two" in results else "final_return"
-    vanilla = next(r["mean_return"] for r in fig3_summary(payload) if r["cell_types"] is None)
+    results = payload.results
+    last_two = results.summary_last_two is not None
+    vanilla = next(r.mean_return for r in fig3_summary(payload) if r.cell_types is None)
     return [
         {
-            "settings": r["settings"],
-            "cell_types": r["cell_types"],
-            "seed": r["seed"],
-            "fraction": r[score] / vanilla,
+            "settings": r.settings,
+            "cell_types": r.cell_types,
+            "seed": r.seed,
+            "fraction": (r.last_two_return if last_two else r.final_return) / vanilla,
         }
-        for r in results["runs"]
-        if r["cell_types"] is not None
+        for r in results.runs
+        if r.cell_types is not None
     ]
 
 
@@ -300,7 +299,7 @@ FIG3_GENOMES = {
 }
 
 
-def fig3_table(payloads: list[Payload]) -> pd.DataFrame:
+def fig3_table(payloads: list["Fig3"]) -> pd.DataFrame:
     """Figure 3 sweeps, one row per body, genome settings (``FIG3_GENOMES``) and cell types
     ("vanilla" for PPO), each run scored as the verdicts score it (``fig3_summary``: the
     mean of its last two evaluations where the file has it); columns named as

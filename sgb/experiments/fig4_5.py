@@ -35,6 +35,7 @@ from sgb.schemas import (
     Correlation,
     Finite,
     List,
+    Positive,
     Probability,
     Provenance,
     Record,
@@ -94,15 +95,15 @@ def run_fig5(profile: str, out_dir: Path, env: str = "ant") -> Path:
     return _run_population(profile, out_dir, env, "fig5")
 
 
-def figure4_rows(returns: dict) -> list[Row]:
+def figure4_rows(returns: "Fig4Returns") -> list[Row]:
     """Figure 4E: r between the normal and the long-legged body. The paper's r is compared
     as this measurement would see it: attenuated by the reliability of each body's
     k-episode means (an r of rho between true abilities is observed as about
     rho * sqrt(rel_x rel_y)). Where the individuals cannot be told apart at all (a
     reliability of 0 or below), the budget that decides is in episodes, from the upper
     end of the intraclass correlation's interval."""
-    x = np.asarray(returns["normal"]["individuals"])
-    y = np.asarray(returns["long_legs"]["individuals"])
+    x = np.asarray(returns.normal.individuals)
+    y = np.asarray(returns.long_legs.individuals)
     splits = [variance_split(v) for v in (x, y)]
     rel = [max(s.reliability, 0.0) for s in splits]
     attenuation = math.sqrt(rel[0] * rel[1])
@@ -124,12 +125,12 @@ def figure4_rows(returns: dict) -> list[Row]:
     return [legs_row(setting, test, attenuation, budget, decide)]
 
 
-def figure5_rows(fig5: dict) -> list[Row]:
+def figure5_rows(fig5: "Fig5Results") -> list[Row]:
     """Figure 5: the population's mean return against its mean network's, our paired
     protocol and the authors' (individuals against the mean network's own sample, Welch).
     The paper's effect: about 1 % of the return (what its plot data imply)."""
-    returns = fig5["returns"]["normal"]
-    ind, mean_net = np.asarray(returns["individuals"]), np.asarray(returns["mean_network"])
+    returns = fig5.returns.normal
+    ind, mean_net = np.asarray(returns.individuals), np.asarray(returns.mean_network)
     paired = stats.paired(ind.mean(axis=1), mean_net.mean(axis=1))
     effect = 0.01 * float(mean_net.mean())
     ours = judge(
@@ -142,14 +143,14 @@ def figure5_rows(fig5: dict) -> list[Row]:
     )
     if ours.verdict == verdicts.INCONCLUSIVE:
         ours = replace(ours, decide=episodes_to_decide(ind - mean_net, effect))
-    authors = fig5["authors_protocol"]
-    a_all = np.asarray(authors["individuals"])
-    a_mean = np.asarray(authors["mean_network"])
+    authors = fig5.authors_protocol
+    a_all = np.asarray(authors.individuals)
+    a_mean = np.asarray(authors.mean_network)
     a_effect = 0.01 * float(a_mean.mean())
     theirs = judge(
         "fig5.population_beats_mean",
         f"ant, 64 types, the authors' protocol: sampled actions, {a_all.shape[1]} episodes "
-        f"each, mean network {a_mean.size} (Welch; their one-sample t = {authors['t']:.2f})",
+        f"each, mean network {a_mean.size} (Welch; their one-sample t = {authors.t:.2f})",
         stats.welch(a_all.mean(axis=1), a_mean),
         f"{a_all.shape[0]} individuals x {a_all.shape[1]} episodes, "
         f"{a_mean.size} mean-network episodes",
@@ -195,7 +196,7 @@ def fig4_evidence(records: Records) -> list[Row]:
     if payload is None:
         return []
     steps = trained_steps(records.get("fig3", "ant"))
-    return genomes_at(figure4_rows(payload["results"]["returns"]), steps)
+    return genomes_at(figure4_rows(payload.results.returns), steps)
 
 
 def fig5_evidence(records: Records) -> list[Row]:
@@ -203,7 +204,7 @@ def fig5_evidence(records: Records) -> list[Row]:
     payload = records.get("fig5")
     if payload is None:
         return []
-    return genomes_at(figure5_rows(payload["results"]), trained_steps(records.get("fig3", "ant")))
+    return genomes_at(figure5_rows(payload.results), trained_steps(records.get("fig3", "ant")))
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -288,6 +289,7 @@ class Fig5Test(Record):
 
     t: Finite
     p: Probability
+    dof: Positive
     individuals_ci99: List[Return]
     mean_network_ci99: List[Return]
 

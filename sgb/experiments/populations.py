@@ -73,7 +73,7 @@ from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
@@ -86,6 +86,7 @@ from sgb.schemas import (
     List,
     NonNegative,
     Positive,
+    Probability,
     Record,
     Reliability,
     ResultsFile,
@@ -480,35 +481,41 @@ def _write(recording: Recording, results: dict) -> Path:
     return recording.write(results, seeds, parts=parts)
 
 
-def _pooled_test(name: str, pooled: dict, n: int, transform=None) -> stats.Test:
+def _pooled_test(name: str, pooled: "Pooled | PooledR", n: int, transform=None) -> stats.Test:
     """A random-effects pooled estimate (DerSimonian-Laird, normal interval) as a ``Test``;
-    ``transform`` maps Fisher's z back to r where the pooling was on z."""
-    estimate, (low, high) = pooled["random_effects"], pooled["random_effects_ci"]
-    se = pooled.get("random_effects_se", pooled.get("random_effects_z_se"))
+    ``transform`` maps Fisher's z back to r where the pooling was on z (``PooledR``)."""
+    estimate, (low, high) = pooled.random_effects, pooled.random_effects_ci
+    se = pooled.random_effects_z_se if isinstance(pooled, PooledR) else pooled.random_effects_se
     z = (math.atanh(estimate) if transform else estimate) / se
     detectable = 2.8 * se if transform is None else transform(2.8 * se)
     p = float(2 * scipy_stats.norm.sf(abs(z)))
     return stats.Test(name, estimate, low, high, math.inf, p, detectable, n)
 
 
-def populations_rows(results: dict) -> list[Row]:
+def _bound(normal: "NormalSplit") -> float:
+    """The upper bound on the SD between individuals, % of the return (0 where none)."""
+    bound = normal.between_sd_bound_percent
+    return 0.0 if bound is None else bound
+
+
+def populations_rows(results: "PopulationsResults") -> list[Row]:
     """Figures 4E and 5 on several genomes per genome settings (``sgb.experiments.
     populations``), pooled over the genomes by random effects. Figure 4E's r is compared
     with the paper's as this measurement sees it, attenuated by the bodies' mean
     reliabilities."""
     rows = []
-    for settings, pooled in results["pooled"].items():
+    for settings, pooled in results.pooled.items():
         done = [
-            g["summary"]
-            for g in results["genomes"].values()
-            if g["settings"] == settings and "summary" in g
+            g.summary
+            for g in results.genomes.values()
+            if g.settings == settings and g.summary is not None
         ]
         n_genomes = len(done)
-        episodes = len(next(iter(results["genomes"].values()))["parts"]["normal"]["returns"][0])
+        episodes = len(next(iter(results.genomes.values())).parts.normal.returns[0])
         who = "our" if settings == "ours" else "the authors'"
         budget = f"{n_genomes} genomes x 100 individuals x {episodes} episodes"
         label = f"ant, {who} genome, 64 types, {n_genomes} genomes pooled (random effects)"
-        diff = _pooled_test("pooled z", pooled["mean_network_percent"]["fixed_effect"], n_genomes)
+        diff = _pooled_test("pooled z", pooled.mean_network_percent.fixed_effect, n_genomes)
         rows.append(
             judge(
                 "fig5.population_beats_mean",
@@ -519,52 +526,50 @@ def populations_rows(results: dict) -> list[Row]:
             )
         )
         rels = [
-            max(g["normal"]["variance_split"]["reliability"], 0.0)
-            * max(g["long_legs"]["variance_split"]["reliability"], 0.0)
+            max(g.normal.variance_split.reliability, 0.0)
+            * max(g.long_legs.variance_split.reliability, 0.0)
             for g in done
         ]
-        r = _pooled_test(
-            "pooled Fisher z", pooled["legs_r"]["fixed_effect"], 100 * n_genomes, math.tanh
-        )
-        bound = max(g["normal"].get("between_sd_bound_percent", 0.0) for g in done)
+        r = _pooled_test("pooled Fisher z", pooled.legs_r.fixed_effect, 100 * n_genomes, math.tanh)
+        bound = max(_bound(g.normal) for g in done)
         attenuation = float(np.mean(np.sqrt(rels)))
         rows.append(legs_row(label, r, attenuation, budget, sd_below(bound)))
-    for genome in results["genomes"].values():
-        if "summary" in genome:
-            who = "our" if genome["settings"] == "ours" else "the authors'"
-            setting = f"ant, {who} genome, 64 types, seed {genome['training_seed']}"
-            rows += [r for r in [variability_row(genome["summary"], setting)] if r]
+    for genome in results.genomes.values():
+        if genome.summary is not None:
+            who = "our" if genome.settings == "ours" else "the authors'"
+            setting = f"ant, {who} genome, 64 types, seed {genome.training_seed}"
+            rows += [r for r in [variability_row(genome.summary.normal, setting)] if r]
     return rows
 
 
-def regime_population_rows(results: dict) -> list[Row]:
+def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
     """Figures 4E and 5 on the genome of the authors' training regime at the paper's budget
     (``reproduce regime_populations``; one genome): Figure 5 under our protocol
     (deterministic actions, the mean network on the same initial states, paired) and under
     theirs (sampled actions), by their one-sample t and by Welch's t, both in % of the mean
     network's return; Figure 4E's r against the paper's as these reliabilities see it."""
     rows = []
-    for genome in results["genomes"].values():
-        summary = genome.get("summary")
+    for genome in results.genomes.values():
+        summary = genome.summary
         if summary is None:
             continue
-        n, episodes = np.shape(genome["parts"]["normal"]["returns"])
+        n, episodes = np.shape(genome.parts.normal.returns)
         steps = "5 x 10^7 steps"
-        label = f"ant, the authors' regime, {steps}, 64 types, seed {genome['training_seed']}"
+        label = f"ant, the authors' regime, {steps}, 64 types, seed {genome.training_seed}"
         budget = f"1 genome x {n} individuals x {episodes} episodes"
-        ours = summary["mean_network"]
-        percent = 100 / ours["mean_network_return"]
-        tests = [("our protocol (paired, same states)", stored_test(ours["test"], percent))]
-        if "authors_protocol" in summary:
-            theirs = summary["authors_protocol"]
-            base = 100 / theirs["mean_network_mean"]
+        ours = summary.mean_network
+        percent = 100 / ours.mean_network_return
+        tests = [("our protocol (paired, same states)", stored_test(ours.test, percent))]
+        if summary.authors_protocol is not None:
+            theirs = summary.authors_protocol
+            base = 100 / theirs.mean_network_mean
             sampled = (
-                f"their protocol ({theirs['individual_episodes']} sampled episodes each, "
-                f"mean network {theirs['mean_network_episodes']})"
+                f"their protocol ({theirs.individual_episodes} sampled episodes each, "
+                f"mean network {theirs.mean_network_episodes})"
             )
             tests += [
-                (f"{sampled}, their one-sample t", stored_test(theirs["one_sample"], base)),
-                (f"{sampled}, Welch t", stored_test(theirs["welch"], base)),
+                (f"{sampled}, their one-sample t", stored_test(theirs.one_sample, base)),
+                (f"{sampled}, Welch t", stored_test(theirs.welch, base)),
             ]
         for protocol, test in tests:
             rows.append(
@@ -575,31 +580,30 @@ def regime_population_rows(results: dict) -> list[Row]:
                     budget,
                 )
             )
-        reliabilities = [
-            summary[b]["variance_split"]["reliability"] for b in ("normal", "long_legs")
-        ]
+        reliabilities = [b.variance_split.reliability for b in (summary.normal, summary.long_legs)]
         attenuation = math.sqrt(max(reliabilities[0], 0.0) * max(reliabilities[1], 0.0))
-        bound = summary["normal"].get("between_sd_bound_percent", 0.0)
-        legs = stored_test(summary["legs"]["test"])
-        rows.append(legs_row(label, legs, attenuation, budget, sd_below(bound)))
-        rows += [r for r in [variability_row(summary, label, "title.variability.regime")] if r]
+        legs = stored_test(summary.legs.test)
+        rows.append(legs_row(label, legs, attenuation, budget, sd_below(_bound(summary.normal))))
+        rows += [
+            r for r in [variability_row(summary.normal, label, "title.variability.regime")] if r
+        ]
     return rows
 
 
-def populations(payload: Payload | None) -> dict[str, str]:
+def populations(payload: "Populations | None") -> dict[str, str]:
     """The populations experiment (``rl/populations_ant_cpu.json``): ``pop_complete``
     (genomes summarised) and, per genome settings, its Figure 5 and 4E rows
     (``pop_fig5_{ours,authors}_*``, ``pop_fig4e_*``); without the file, "none of the
     genomes" and ``NOT_RUN``."""
     if payload is None:
         return {"pop_complete": "none of the genomes"} | populations_rows_texts([])
-    genomes = payload["results"]["genomes"]
-    done = sum("summary" in g for g in genomes.values())
-    rows = populations_rows(payload["results"])
+    genomes = payload.results.genomes
+    done = sum(g.summary is not None for g in genomes.values())
+    rows = populations_rows(payload.results)
     return {"pop_complete": f"{done} of {len(genomes)} genomes"} | populations_rows_texts(rows)
 
 
-def regime_populations(payload: Payload | None) -> dict[str, str]:
+def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     """Figures 4E and 5 on the genome of the authors' regime
     (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``), the
     normal body's test-retest reliability (``regime_pop_retest``: split-half r with its
@@ -608,18 +612,18 @@ def regime_populations(payload: Payload | None) -> dict[str, str]:
     under our protocol (``regime_pop_ours_*``), their one-sample t
     (``regime_pop_theirs_*``) and Welch's (``regime_pop_welch_*``); ``NOT_RUN`` for all
     without the file or its summary."""
-    rows = [] if payload is None else regime_population_rows(payload["results"])
+    rows = [] if payload is None else regime_population_rows(payload.results)
     fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"] + [None] * 3
     texts = {"regime_pop_design": NOT_RUN, "regime_pop_retest": NOT_RUN}
     if rows:
-        genome = next(g for g in payload["results"]["genomes"].values() if "summary" in g)
-        normal = genome["summary"]["normal"]
-        split, anova = normal["split_half"], normal["variance_split"]
+        genome = next(g for g in payload.results.genomes.values() if g.summary is not None)
+        normal = genome.summary.normal
+        split, anova = normal.split_half, normal.variance_split
         texts["regime_pop_design"] = rows[0].budget
         texts["regime_pop_retest"] = (
-            f"r = {split['r']:.2f} [{split['r_ci'][0]:.2f}, {split['r_ci'][1]:.2f}] between "
-            f"the means of the even and the odd of {split['episodes']} episodes, a "
-            f"reliability of {anova['reliability']:.2f} for the mean of all of them"
+            f"r = {split.r:.2f} [{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}] between "
+            f"the means of the even and the odd of {split.episodes} episodes, a "
+            f"reliability of {anova.reliability:.2f} for the mean of all of them"
         )
     texts |= row_texts("regime_pop_legs", next((r for r in rows if r.key == "fig4e.r_legs"), None))
     for name, row in zip(("ours", "theirs", "welch"), fig5, strict=False):
@@ -644,7 +648,7 @@ def evidence(records: Records) -> list[Row]:
     if payload is None:
         return []
     steps = trained_steps(records.get("fig3", "ant"))
-    return genomes_at(populations_rows(payload["results"]), steps)
+    return genomes_at(populations_rows(payload.results), steps)
 
 
 def regime_evidence(records: Records) -> list[Row]:
@@ -654,7 +658,7 @@ def regime_evidence(records: Records) -> list[Row]:
     if payload is None:
         return []
     steps = trained_steps(records.get("regime"))
-    return genomes_at(regime_population_rows(payload["results"]), steps)
+    return genomes_at(regime_population_rows(payload.results), steps)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -665,8 +669,15 @@ def texts(records: Records, card: Card) -> dict[str, str]:
 
 
 class VarianceSplit(Record):
+    """The one-way split of a body's returns (individuals x episodes)."""
+
+    n_individuals: Count
+    episodes: Count
+    within_var: NonNegative
     reliability: Reliability
     icc: Reliability
+    icc_ci: List[Reliability]
+    p: Probability
 
 
 class Split(Record):
@@ -679,6 +690,7 @@ class NormalSplit(Split):
 
 class PopulationNormal(NormalSplit):
     mean_return: Return
+    between_sd: NonNegative
 
 
 class MeanNetworkPercent(Record):
@@ -702,11 +714,14 @@ class NormalPart(Record):
 
 class PopulationGenome(Record):
     settings: str
+    training_seed: Seed
     parts: NormalPart
     summary: PopulationSummary = None
 
 
 class Pooled(Record):
+    estimate: Finite
+    ci: List[Finite]
     random_effects: Finite
     random_effects_ci: List[Finite]
     random_effects_se: Positive
@@ -720,8 +735,16 @@ class PooledR(Record):
     random_effects_z_se: Positive
 
 
+class BetweenGenomes(Record):
+    """The genomes' estimates: their mean and Student-t interval (null with one genome)."""
+
+    mean: Finite
+    ci: List[Finite | None]
+
+
 class FixedEffect(Record):
     fixed_effect: Pooled
+    between_genomes: BetweenGenomes
 
 
 class FixedEffectR(Record):
@@ -729,6 +752,7 @@ class FixedEffectR(Record):
 
 
 class PooledSetting(Record):
+    n_genomes: Count
     mean_network_percent: FixedEffect
     legs_r: FixedEffectR
 
@@ -761,7 +785,7 @@ class SplitHalf(Record):
     r_ci: List[Correlation]
 
 
-class RegimeNormal(NormalSplit):
+class RegimeNormal(PopulationNormal):
     split_half: SplitHalf
 
 

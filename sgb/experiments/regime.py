@@ -38,11 +38,24 @@ from sgb.prose import Card, row_texts
 from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.regime_runs import RUNS, run_config, train_regime
 from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
-from sgb.schemas import Finite, List, Positive, Record, ResultsFile, Seconds, Training
+from sgb.schemas import (
+    Count,
+    Finite,
+    List,
+    NonNegative,
+    Positive,
+    Provenance,
+    Record,
+    ResultsFile,
+    Return,
+    Seconds,
+    Seed,
+    Training,
+)
 
 
 def run(profile: str, out_dir: Path) -> Path:
@@ -125,15 +138,20 @@ def summarise_regime(runs: list[dict]) -> list[dict]:
 PROFILES = RUNS
 
 
-def regime_rows(results: dict, steps: int) -> list[Row]:
+def regime_rows(runs: list["RegimeRun"], steps: int) -> list[Row]:
     """Figure 3C at the paper's budget (``sgb.experiments.regime``): the level at 128 types
     and the fall to 16 under the authors' regime, each run scored by its last evaluation
     (the authors' window on all 2,048 training environments); per genome (their Gaussian
     per pair, and their aliased pairs). A row appears once the two arms it compares have
     two seeds each."""
-    runs = [{**dict(r), "settings": r.get("genome", "authors")} for r in results["runs"]]
     return figure3_rows(
-        {"runs": runs}, "ant", steps, "final_return", REGIME_SETTINGS, key_infix="regime."
+        runs,
+        "ant",
+        steps,
+        "final_return",
+        REGIME_SETTINGS,
+        key_infix="regime.",
+        settings_of=lambda r: r.genome,
     )
 
 
@@ -141,7 +159,7 @@ def _seeds(n: int) -> str:
     return f"{n} seed" + ("" if n == 1 else "s")
 
 
-def regime(payload: Payload) -> dict[str, str]:
+def regime(payload: "Regime") -> dict[str, str]:
     """The authors' regime (``rl/regime_ant_cpu.json``), from its summary per arm (mean
     final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
     on the authors' scale, its mean env-steps/s and wall time per run (``regime_*``),
@@ -149,9 +167,8 @@ def regime(payload: Payload) -> dict[str, str]:
     scorecard's rows of the level at 128 types and the fall to 16 with the authors' genome
     (``regime_level``, ``regime_fall``: estimate, interval and verdict; "no row yet" while
     an arm they compare has one seed)."""
-    runs, summary = payload["results"]["runs"], payload["results"]["summary"]
-    steps = payload["provenance"]["config"]["ppo"]["total_steps"]
-    card = claims.by_key(regime_rows(payload["results"], steps))
+    runs, summary = payload.results.runs, payload.results.summary
+    card = claims.by_key(regime_rows(runs, trained_steps(payload)))
     genome = claims.REGIME_SETTINGS["authors"]
     texts = {}
     for name, key in (("level", "fig3.level_128.regime.ant"), ("fall", "fig3.fall_16.regime.ant")):
@@ -162,21 +179,21 @@ def regime(payload: Payload) -> dict[str, str]:
             if row is None
             else f"{found['row_ours']}, {found['row_verdict']}"
         )
-    vanilla = next(s for s in summary if s["cell_types"] is None)
-    mine = [r for r in runs if r["cell_types"] is None]
-    n = len(vanilla["seeds"])
-    spread = "" if vanilla["sem_return"] is None else f" ± {vanilla['sem_return']:.0f} (SEM)"
-    arms = [s for s in summary if s["cell_types"] is not None]
+    vanilla = next(s for s in summary if s.cell_types is None)
+    mine = [r for r in runs if r.cell_types is None]
+    n = len(vanilla.seeds)
+    spread = "" if vanilla.sem_return is None else f" ± {vanilla.sem_return:.0f} (SEM)"
+    arms = [s for s in summary if s.cell_types is not None]
     return {
-        "regime_vanilla": f"{vanilla['mean_return']:.0f}{spread} over {_seeds(n)}",
-        "regime_steps": f"{mine[0]['eval_steps'][-1]:,}",
-        "regime_vanilla_scale": f"{vanilla['mean_authors_scale']:.2f}",
-        "regime_speed": f"{np.mean([r['train_steps_per_s'] for r in mine]):,.0f}",
-        "regime_wall": f"{np.mean([r['wall_time_s'] for r in mine]) / 3600:.1f} h",
+        "regime_vanilla": f"{vanilla.mean_return:.0f}{spread} over {_seeds(n)}",
+        "regime_steps": f"{mine[0].eval_steps[-1]:,}",
+        "regime_vanilla_scale": f"{vanilla.mean_authors_scale:.2f}",
+        "regime_speed": f"{np.mean([r.train_steps_per_s for r in mine]):,.0f}",
+        "regime_wall": f"{np.mean([r.wall_time_s for r in mine]) / 3600:.1f} h",
         "regime_sgb": "; ".join(
-            f"{s['cell_types']} types"
-            + ("" if s["genome"] == "authors" else ", pairs aliased")
-            + f": {s['fraction_of_vanilla']:.2f} of vanilla ({_seeds(len(s['seeds']))})"
+            f"{s.cell_types} types"
+            + ("" if s.genome == "authors" else ", pairs aliased")
+            + f": {s.fraction_of_vanilla:.2f} of vanilla ({_seeds(len(s.seeds))})"
             for s in arms
         )
         or "none",
@@ -186,7 +203,7 @@ def regime(payload: Payload) -> dict[str, str]:
 def evidence(records: Records) -> list[Row]:
     """Figure 3C under the authors' regime (``regime_rows``)."""
     payload = records.get("regime")
-    return [] if payload is None else regime_rows(payload["results"], trained_steps(payload))
+    return [] if payload is None else regime_rows(payload.results.runs, trained_steps(payload))
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -205,7 +222,7 @@ REGIME_COLUMNS = {
 }
 
 
-def regime_table(payload: Payload) -> pd.DataFrame:
+def regime_table(payload: "Regime") -> pd.DataFrame:
     """The authors' regime (``sgb.experiments.regime``), one row per run: final and
     last-two evaluation returns, the final one on the authors' Figure 3 scale, training
     env-steps/s and wall time; columns named as ``REGIME_COLUMNS`` maps the files' keys."""
@@ -214,15 +231,43 @@ def regime_table(payload: Payload) -> pd.DataFrame:
 
 
 class RegimeRun(Training):
+    genome: str
     authors_scale: Finite
     train_steps_per_s: Positive
     wall_time_s: Seconds
 
 
+class RegimeSummary(Record):
+    """One arm: its seeds' mean final return, on the authors' scale too, and its mean
+    fraction of the vanilla run of the same seed (null without one)."""
+
+    cell_types: Count | None
+    genome: str
+    seeds: List[Seed]
+    mean_return: Return
+    sem_return: NonNegative | None
+    mean_authors_scale: Finite
+    fraction_of_vanilla: Finite | None
+
+
 class RegimeResults(Record):
     env: str
     runs: List[RegimeRun]
+    summary: List[RegimeSummary]
+
+
+class TotalSteps(Record):
+    total_steps: Count
+
+
+class PpoConfig(Record):
+    ppo: TotalSteps
+
+
+class RegimeProvenance(Provenance):
+    config: PpoConfig
 
 
 class Regime(ResultsFile):
+    provenance: RegimeProvenance
     results: RegimeResults

@@ -29,7 +29,7 @@ from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl import checkpoints
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regime_runs import RUNS, RegimeRun, run_config
@@ -124,23 +124,23 @@ def _write(recording: Recording, runs: list[dict]) -> Path:
 PROFILES = {p: gait_config(p) for p in PROFILE_NAMES}
 
 
-def regime_gait(payload: Payload | None) -> dict[str, str]:
-    """Whether the regime's agents walk (``sgb.experiments.regime_gait``): each arm's runs'
-    forward speeds by seed (``gait_runs``) and how many walk, at least the file's walking
-    speed (``gait_walks``)."""
-    runs = [] if payload is None else payload["results"]["runs"]
+def regime_gait(results: "RegimeGaitResults | None") -> dict[str, str]:
+    """Whether the regime's agents walk (the results of ``sgb.experiments.regime_gait``):
+    each arm's runs' forward speeds by seed (``gait_runs``) and how many walk, at least the
+    file's walking speed (``gait_walks``)."""
+    runs = [] if results is None else results.runs
     if not runs:
         return {"gait_runs": NOT_RUN, "gait_walks": NOT_RUN}
     arms = []
     # vanilla first, then from the most cell types to the fewest
-    for k in sorted({r["cell_types"] for r in runs}, key=lambda k: (k is not None, -(k or 0))):
-        mine = sorted((r for r in runs if r["cell_types"] == k), key=lambda r: r["seed"])
-        speeds = ", ".join(f"{r['forward_velocity']:.2f}" for r in mine)
-        seeds = ", ".join(str(r["seed"]) for r in mine)
+    for k in sorted({r.cell_types for r in runs}, key=lambda k: (k is not None, -(k or 0))):
+        mine = sorted((r for r in runs if r.cell_types == k), key=lambda r: r.seed)
+        speeds = ", ".join(f"{r.forward_velocity:.2f}" for r in mine)
+        seeds = ", ".join(str(r.seed) for r in mine)
         which = f"seed{'s' * (len(mine) > 1)} {seeds}"
         arms.append(f"{'vanilla' if k is None else f'{k} types'} {speeds} m/s ({which})")
-    walking = sum(r["walks"] for r in runs)
-    speed = payload["results"]["walking_speed"]
+    walking = sum(r.walks for r in runs)
+    speed = results.walking_speed
     return {
         "gait_runs": "; ".join(arms),
         "gait_walks": f"{walking} of the {len(runs)} runs walk (at least {speed:g} m/s)",
@@ -149,7 +149,8 @@ def regime_gait(payload: Payload | None) -> dict[str, str]:
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the regime's gaits (``regime_gait``)."""
-    return regime_gait(records.get("regime_gait"))
+    payload = records.get("regime_gait")
+    return regime_gait(None if payload is None else payload.results)
 
 
 class GaitRun(Record):

@@ -21,7 +21,7 @@ from scipy import stats as scipy_stats
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.regime_runs import RUNS, RegimeRun, RegimeRuns, run_config, train_regime
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run
 from sgb.schemas import (
@@ -128,34 +128,35 @@ def write_peer(recording: Recording, out_dir: Path) -> Path:
     return recording.write(results, sorted({r["seed"] for r in runs}), parts=runs)
 
 
-def regime_peer(payload: Payload | None) -> dict[str, str]:
-    """The regime beside the authors' own code at their peer budget
-    (``sgb.experiments.regime_peer``), at the last step of each run label (``vanilla``,
+def regime_peer(results: "RegimePeerResults | None") -> dict[str, str]:
+    """The regime beside the authors' own code at their peer budget (the results of
+    ``sgb.experiments.regime_peer``), at the last step of each run label (``vanilla``,
     ``aliased``): our seeds' returns and the interval of one more run
     (``peer_{label}_ours``), the authors' return (``peer_{label}_theirs``) and whether it
     lies inside (``peer_{label}_inside``)."""
     out = {}
-    rows = [] if payload is None else payload["results"]["comparison"]
+    rows = [] if results is None else results.comparison
     for name, label in (("vanilla", "vanilla"), ("aliased", "k64_aliased")):
-        mine = [r for r in rows if r["label"] == label and r["theirs"] is not None]
+        mine = [r for r in rows if r.label == label and r.theirs is not None]
         last = mine[-1] if mine else None
-        if last is None or last["interval"] is None:
+        if last is None or last.interval is None:
             out |= {f"peer_{name}_{part}": NOT_RUN for part in ("ours", "theirs", "inside")}
             continue
-        returns = ", ".join(f"{r:.0f}" for r in last["ours"])
-        low, high = last["interval"]
+        returns = ", ".join(f"{r:.0f}" for r in last.ours)
+        low, high = last.interval
         out[f"peer_{name}_ours"] = (
-            f"{returns} at {last['step']:,} steps (mean {last['mean']:.0f}; one more run "
+            f"{returns} at {last.step:,} steps (mean {last.mean:.0f}; one more run "
             f"within [{low:.0f}, {high:.0f}], 95 %)"
         )
-        out[f"peer_{name}_theirs"] = f"{last['theirs']:.1f}"
-        out[f"peer_{name}_inside"] = "inside" if last["inside"] else "outside"
+        out[f"peer_{name}_theirs"] = f"{last.theirs:.1f}"
+        out[f"peer_{name}_inside"] = "inside" if last.inside else "outside"
     return out
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the regime beside the authors' code (``regime_peer``)."""
-    return regime_peer(records.get("regime_peer"))
+    payload = records.get("regime_peer")
+    return regime_peer(None if payload is None else payload.results)
 
 
 class PeerRun(Training):

@@ -18,7 +18,7 @@ from sgb import genome
 from sgb.profiles import check_profile
 from sgb.prose import Card
 from sgb.recording import start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.protocols import (
@@ -31,6 +31,7 @@ from sgb.rl.protocols import (
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, seed_sem, trained_run
 from sgb.rl.sweep import sweep_config
 from sgb.schemas import (
+    Count,
     Finite,
     List,
     NonNegative,
@@ -89,25 +90,26 @@ def summarise_spread(runs: list[dict]) -> list[dict]:
     return out
 
 
-def spread_prose(runs: list[dict]) -> dict[str, str]:
-    """The values chapter 5 says of the spread sweep, as text by name, for each initial
-    spread k (0 the narrowest): ``spread{k}_sigma`` (trained sigma), ``_advantage`` (the
+def spread_prose(results: "SpreadResults") -> dict[str, str]:
+    """The values chapter 5 says of the spread sweep (its runs and their summary), as text by
+    name, for each initial spread k (0 the narrowest): ``spread{k}_sigma`` (trained sigma),
+    ``_advantage`` (the
     individuals' mean return less the mean network's, mean +- SEM over seeds), ``_t`` (the
     paired t of each seed), ``_mean_network`` and ``_individuals`` (mean returns), ``_sd``
     (the SD of the individuals' means, mean +- SEM), ``_sigma_change`` (the trained sigma's
     relative change from its start, the largest over seeds, %)."""
     values = {}
-    for k, row in enumerate(summarise_spread(runs)):
-        group = [r for r in runs if r["rho_init"] == row["rho_init"]]
-        change = max(abs(r["sigma_trained"] / r["sigma_init"] - 1.0) for r in group)
+    for k, row in enumerate(results.summary):
+        group = [r for r in results.runs if r.rho_init == row.rho_init]
+        change = max(abs(r.sigma_trained / r.sigma_init - 1.0) for r in group)
         name = f"spread{k}"
         values |= {
-            f"{name}_sigma": f"{row['sigma_trained']:.2g}",
-            f"{name}_advantage": f"{row['advantage']:+.0f} ± {row['sem_advantage']:.0f}",
-            f"{name}_t": ", ".join(f"{r['paired_test']['t']:+.2f}" for r in group),
-            f"{name}_mean_network": f"{row['mean_network_mean']:.0f}",
-            f"{name}_individuals": f"{np.mean([r['individuals_mean'] for r in group]):.0f}",
-            f"{name}_sd": f"{row['individuals_sd']:.0f} ± {row['sem_individuals_sd']:.0f}",
+            f"{name}_sigma": f"{row.sigma_trained:.2g}",
+            f"{name}_advantage": f"{row.advantage:+.0f} ± {row.sem_advantage:.0f}",
+            f"{name}_t": ", ".join(f"{r.paired_test.t:+.2f}" for r in group),
+            f"{name}_mean_network": f"{row.mean_network_mean:.0f}",
+            f"{name}_individuals": f"{np.mean([r.individuals_mean for r in group]):.0f}",
+            f"{name}_sd": f"{row.individuals_sd:.0f} ± {row.sem_individuals_sd:.0f}",
             f"{name}_sigma_change": f"{100 * change:.1f} %",
         }
     return values
@@ -163,25 +165,25 @@ PROFILES = {p: spread_config(p) for p in ("smoke", "cpu", "paper")}
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 5 glues of the spreads (``spread_prose``)."""
-    return spread_prose(records("spread")["results"]["runs"])
+    return spread_prose(records("spread").results)
 
 
-def spread_table(payload: Payload) -> pd.DataFrame:
+def spread_table(payload: "Spread") -> pd.DataFrame:
     """The spread sweep (``sgb.experiments.rl_spread``), one row per run: initial and
     trained sigma, mean returns of the individuals and the mean network, the SD of the
     individuals' returns, and the paired t over individuals with its p."""
     return pd.DataFrame(
         {
-            "sigma start": r["sigma_init"],
-            "seed": r["seed"],
-            "sigma trained": r["sigma_trained"],
-            "individuals": r["individuals_mean"],
-            "mean network": r["mean_network_mean"],
-            "SD of individuals": r["individuals_sd"],
-            "paired t(99)": r["paired_test"]["t"],
-            "p": r["paired_test"]["p"],
+            "sigma start": r.sigma_init,
+            "seed": r.seed,
+            "sigma trained": r.sigma_trained,
+            "individuals": r.individuals_mean,
+            "mean network": r.mean_network_mean,
+            "SD of individuals": r.individuals_sd,
+            "paired t(99)": r.paired_test.t,
+            "p": r.paired_test.p,
         }
-        for r in payload["results"]["runs"]
+        for r in payload.results.runs
     )
 
 
@@ -202,8 +204,24 @@ class SpreadRun(Record):
     paired_test: PairedTest
 
 
+class SpreadSummary(Record):
+    """One initial spread over its seeds: the individuals' advantage over their mean
+    network and their SD (means, SEMs; null with one seed), the trained sigma."""
+
+    rho_init: Finite
+    sigma_init: Positive
+    advantage: Finite
+    sem_advantage: NonNegative | None
+    individuals_sd: NonNegative
+    sem_individuals_sd: NonNegative | None
+    sigma_trained: NonNegative
+    mean_network_mean: Return
+    n_seeds: Count
+
+
 class SpreadResults(Record):
     runs: List[SpreadRun]
+    summary: List[SpreadSummary]
 
 
 class Spread(ResultsFile):

@@ -8,6 +8,7 @@ import seaborn as sns
 from sgb import stats
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
 from sgb.rl.regimes import FIG3_SCALE
+from sgb.schemas import BenchBackendsResults, Record, Training
 
 SETTINGS_STYLE = {
     "ours": ("sgb", "o", "SGB, our settings"),
@@ -18,11 +19,13 @@ SETTINGS_STYLE = {
 }
 
 
-def plot_sweep(summary: list[dict], env: str, seeds: list[dict] | None = None, ax=None):
+def plot_sweep(summary: list[Record], env: str, seeds: list[dict] | None = None, ax=None):
     """Innate return as a fraction of vanilla PPO against the number of cell types (SEM
     bars; each point the mean innate return of an agent's individuals), one line per genome
-    settings, the legend under the axes; each seed a faint dot where ``seeds`` (rows of
-    ``sgb.experiments.fig3.fig3_seeds``) are given, spread a little sideways by seed."""
+    settings, the legend under the axes; ``summary``: a sweep's summary rows
+    (``sgb.experiments.fig3.fig3_summary``, ``Fig3Summary`` records); each seed a faint
+    dot where ``seeds`` (rows of ``sgb.experiments.fig3.fig3_seeds``) are given, spread a
+    little sideways by seed."""
     ax = axes_or_new(ax)
     types = set()
     for settings, (color, marker, label) in SETTINGS_STYLE.items():
@@ -38,17 +41,17 @@ def plot_sweep(summary: list[dict], env: str, seeds: list[dict] | None = None, a
                 linewidths=0,
             )
         rows = sorted(
-            (r for r in summary if r["cell_types"] is not None and r["settings"] == settings),
-            key=lambda r: r["cell_types"],
+            (r for r in summary if r.cell_types is not None and r.settings == settings),
+            key=lambda r: r.cell_types,
         )
         if not rows:
             continue
-        k = [r["cell_types"] for r in rows]
+        k = [r.cell_types for r in rows]
         types.update(k)
         ax.errorbar(
             k,
-            [r["fraction"] for r in rows],
-            yerr=[np.nan if r["sem_fraction"] is None else r["sem_fraction"] for r in rows],
+            [r.fraction for r in rows],
+            yerr=[np.nan if r.sem_fraction is None else r.sem_fraction for r in rows],
             marker=marker,
             capsize=3,
             color=PALETTE[color],
@@ -66,23 +69,23 @@ def plot_sweep(summary: list[dict], env: str, seeds: list[dict] | None = None, a
     return ax
 
 
-def plot_regime(runs: list[dict], env: str = "ant", ax=None):
+def plot_regime(runs: list[Training], env: str = "ant", ax=None):
     """Learning curves under the authors' regime: the training-time evaluation (their
     window return) against env steps, one line per run; the right axis is the authors'
     Figure 3 scale, (R + 724) / (SOTA + 724)."""
     ax = axes_or_new(ax)
-    for run in sorted(runs, key=lambda r: (r["cell_types"] is not None, r["cell_types"] or 0)):
-        vanilla = run["cell_types"] is None
+    for run in sorted(runs, key=lambda r: (r.cell_types is not None, r.cell_types or 0)):
+        vanilla = run.cell_types is None
         color = PALETTE["baseline"] if vanilla else PALETTE["authors"]
-        name = "vanilla PPO" if vanilla else f"SGB, {run['cell_types']} types"
+        name = "vanilla PPO" if vanilla else f"SGB, {run.cell_types} types"
         ax.plot(
-            np.asarray(run["eval_steps"]) / 1e6,
-            run["eval_returns"],
+            np.asarray(run.eval_steps) / 1e6,
+            run.eval_returns,
             marker="o",
             color=color,
             ls="--" if vanilla else "-",
-            alpha=1.0 if run["seed"] == 0 else 0.5,
-            label=f"{name}, seed {run['seed']}",
+            alpha=1.0 if run.seed == 0 else 0.5,
+            label=f"{name}, seed {run.seed}",
         )
     ax.set_xlabel("env steps (millions)")
     ax.set_ylabel("window return (their evaluation)")
@@ -95,11 +98,14 @@ def plot_regime(runs: list[dict], env: str = "ant", ax=None):
     return ax
 
 
-def plot_pair(returns: dict, a: str, b: str, ax=None):
-    """Each individual's mean return on condition ``a`` vs ``b``, SEM over episodes as bars,
-    with the least-squares line and its 95 % band (seaborn's bootstrap, seeded)."""
+def plot_pair(x, y, a: str, b: str, mean_network=None, ax=None):
+    """Each individual's mean return on condition ``a`` vs ``b`` (``x``, ``y``: the
+    individuals' returns, individuals x episodes, on each), SEM over episodes as bars, with
+    the least-squares line and its 95 % band (seaborn's bootstrap, seeded); the mean
+    network's mean returns as a star where ``mean_network`` (its returns on ``a`` and on
+    ``b``) is given."""
     ax = axes_or_new(ax)
-    x, y = np.asarray(returns[a]["individuals"]), np.asarray(returns[b]["individuals"])
+    x, y = np.asarray(x), np.asarray(y)
     ax.errorbar(
         x.mean(1),
         y.mean(1),
@@ -112,10 +118,10 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
         color=PALETTE["individuals"],
         label="individuals",
     )
-    if "mean_network" in returns[a] and "mean_network" in returns[b]:
+    if mean_network is not None:
         ax.plot(
-            np.mean(returns[a]["mean_network"]),
-            np.mean(returns[b]["mean_network"]),
+            np.mean(mean_network[0]),
+            np.mean(mean_network[1]),
             "*",
             ms=14,
             color=PALETTE["mean_network"],
@@ -139,24 +145,25 @@ def plot_pair(returns: dict, a: str, b: str, ax=None):
     return ax
 
 
-def plot_mean_network(returns: dict, condition: str = "normal", ax=None):
+def plot_mean_network(individuals, mean_network, ax=None):
     """Figure 5, our protocol: the individuals' mean returns beside the mean network's on
-    the same initial states, as distributions with 99 % CIs of their means, and the paired
-    t-test."""
-    ind = np.asarray(returns[condition]["individuals"]).mean(1)
-    mean_net = np.asarray(returns[condition]["mean_network"]).mean(1)
+    the same initial states (both individuals x episodes), as distributions with 99 % CIs
+    of their means, and the paired t-test."""
+    ind = np.asarray(individuals).mean(1)
+    mean_net = np.asarray(mean_network).mean(1)
     t = stats.paired(ind, mean_net)
     title = f"paired t({t.dof}) = {t.statistic:.1f}, p = {t.p:.2g}"
     return _population_and_mean_network(ind, mean_net, title, "innate return", ax)
 
 
-def plot_authors_protocol(protocol: dict, ax=None):
-    """Figure 5, the authors' protocol (``sgb.rl.protocols.authors_protocol``): the
+def plot_authors_protocol(protocol: Record, ax=None):
+    """Figure 5, the authors' protocol (``sgb.rl.protocols.authors_protocol``, read back as
+    ``sgb.experiments.fig4_5.AuthorsProtocol``): the
     individuals' mean returns (sampled actions) beside the mean network's episodes, as
     distributions with 99 % CIs of their means, and the one-sample t-test."""
-    ind = np.asarray(protocol["individuals"]).mean(1)
-    title = f"one-sample t({protocol['dof']}) = {protocol['t']:.1f}, p = {protocol['p']:.2g}"
-    mean_net = np.asarray(protocol["mean_network"])
+    ind = np.asarray(protocol.individuals).mean(1)
+    title = f"one-sample t({protocol.dof}) = {protocol.t:.1f}, p = {protocol.p:.2g}"
+    mean_net = np.asarray(protocol.mean_network)
     return _population_and_mean_network(ind, mean_net, title, "return, sampled actions", ax)
 
 
@@ -214,18 +221,21 @@ def _population_and_mean_network(ind, mean_net, title: str, ylabel: str, ax):
     return ax
 
 
-def plot_spread(summary: list[dict], axes=None):
+def plot_spread(summary: list[Record], axes=None):
     """Against the initial sigma (log axis): the individuals' mean return minus the mean
     network's (left) and the standard deviation of the individuals' returns (right);
-    bars are the SEM over seeds."""
+    bars are the SEM over seeds; ``summary``: the spread sweep's, one row per spread
+    (``sgb.experiments.rl_spread.SpreadSummary``)."""
     axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.2))
-    sigma = [r["sigma_init"] for r in summary]
+    sigma = [r.sigma_init for r in summary]
+    advantage = [(r.advantage, r.sem_advantage) for r in summary]
+    spread = [(r.individuals_sd, r.sem_individuals_sd) for r in summary]
     panels = (
-        ("advantage", "individuals - mean network (return)", PALETTE["individuals"]),
-        ("individuals_sd", "SD of individuals' returns", PALETTE["sgb"]),
+        (advantage, "individuals - mean network (return)", PALETTE["individuals"]),
+        (spread, "SD of individuals' returns", PALETTE["sgb"]),
     )
-    for ax, (key, label, color) in zip(axes, panels, strict=True):
-        values, errors = [r[key] for r in summary], [r[f"sem_{key}"] for r in summary]
+    for ax, (points, label, color) in zip(axes, panels, strict=True):
+        values, errors = [v for v, _ in points], [e for _, e in points]
         ax.errorbar(sigma, values, yerr=errors, marker="o", capsize=3, color=color)
         ax.set_xscale("log")
         ax.set_xlabel(r"initial $\sigma$ of every type pair")
@@ -235,21 +245,21 @@ def plot_spread(summary: list[dict], axes=None):
     return axes
 
 
-def plot_backends(bench: dict, axes=None):
+def plot_backends(bench: BenchBackendsResults, axes=None):
     """``benchmarks/bench_backends.py``'s results: training env-steps/s per Brax backend
     (left) and the learning curve of vanilla PPO on the fastest one (right)."""
     axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.4))
-    speeds = bench["throughput"]
-    axes[0].barh(list(speeds), [s["train_steps_per_s"] for s in speeds.values()])
+    speeds = bench.throughput
+    axes[0].barh(list(speeds), [s.train_steps_per_s for s in speeds.values()])
     axes[0].invert_yaxis()
     axes[0].set_ylabel("Brax backend")
     axes[0].set_xlabel("training env-steps/s")
-    axes[0].set_title(f"{bench['env']}: vanilla PPO,\n{bench['throughput_steps']:,} steps")
-    reach = bench["reach"]
-    axes[1].plot(np.array(reach["eval_steps"]) / 1e6, reach["eval_returns"], marker="o")
+    axes[0].set_title(f"{bench.env}: vanilla PPO,\n{bench.throughput_steps:,} steps")
+    reach = bench.reach
+    axes[1].plot(np.array(reach.eval_steps) / 1e6, reach.eval_returns, marker="o")
     axes[1].set_xlabel("training env steps (millions)")
     axes[1].set_ylabel("evaluation return")
-    axes[1].set_title(f"vanilla PPO on {reach['backend']}")
+    axes[1].set_title(f"vanilla PPO on {reach.backend}")
     return axes
 
 
