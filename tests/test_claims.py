@@ -84,9 +84,9 @@ def test_the_sigma_law_row_tells_the_appendix_step_from_the_elbo_step():
             "runs": {"softplus": {"settled_mean": [0.01, settled], "settled_sd": [0.01, 0.002]}},
         }
 
-    (at_fixed_point,) = theory_runs.sigma_law_rows(toy(0.2187))
+    (at_fixed_point,) = theory_runs.sigma_law_rows(theory_runs.ElboToy.model_validate(toy(0.2187)))
     assert at_fixed_point.verdict == verdicts.CONTRADICTED  # sigma stays at sqrt(c/(H+c lambda))
-    (at_zero,) = theory_runs.sigma_law_rows(toy(0.001))
+    (at_zero,) = theory_runs.sigma_law_rows(theory_runs.ElboToy.model_validate(toy(0.001)))
     assert at_zero.verdict == verdicts.REPRODUCED  # what the appendix's step predicts
 
 
@@ -340,9 +340,12 @@ def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
                         "mean_fitness": [0.1] * 300,
                         "individuals": individuals if stochastic else [accuracy] * 100,
                         "mean_network": accuracy,
+                        "sigma_mean": 0.1 if stochastic else 0.0,
+                        "wall_time_s": 1.0,
                     }
                 )
-    helps, flat = evolution.evolution_rows({"dataset": "digits", "records": records})
+    results = evolution.EvolutionResults.model_validate({"dataset": "digits", "records": records})
+    helps, flat = evolution.evolution_rows(results)
     assert helps.verdict in verdicts.IN_DIRECTION
     assert helps.test.estimate == pytest.approx(5.0, abs=0.5)
     assert flat.verdict == verdicts.CONTRADICTED and flat.test.high < 1.0
@@ -372,11 +375,16 @@ def test_bet_hedging_rows_credit_diversified_individuals_and_not_clones_of_clone
                 "rho_init": rho,
                 "training_seed": seed,
                 "sigma_trained": 0.2 if rho == -1.5 else 0.007,
-                "returns": {"individuals": {"normal": individuals[0].tolist()}},
+                "scale": scale,
+                "returns": {
+                    "individuals": {"normal": individuals[0].tolist()},
+                    "clones": {"normal": clones[0].tolist()},
+                },
                 "scores": bet_hedging.scores(individuals, clones, scale),
             }
         )
-    rows = bet_hedging.bet_hedging_rows(json.loads(json.dumps({"genomes": genomes})))
+    results = json.loads(json.dumps({"genomes": genomes}))
+    rows = bet_hedging.bet_hedging_rows(bet_hedging.BetHedgingResults.model_validate(results))
     wide, narrow = rows[:2], rows[2:]
     clones_p = [g["scores"]["clones"]["p_at_least"]["0.5"]["10"] for g in genomes[:3]]
     assert 0.25 < min(clones_p) < max(clones_p) < 0.5  # home, and the next condition by chance
@@ -397,10 +405,15 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
         for genome, start, gain in ((None, "fresh", 0.0), ("g", "mean", 0.3), ("g", "random", 0.0)):
             auc = fresh * (1 + gain + 0.02 * rng.standard_normal()) if genome else fresh
             runs.append(
-                {"genome": genome, "start": start, "seed": seed, "auc": auc, "eval_steps": [0, 5e6]}
+                {"genome": genome, "start": start, "seed": seed, "auc": auc}
+                | {"eval_steps": [0, 5_000_000], "eval_returns": [0.0, auc]}
+                | {"return_at": {f: auc for f in ("0", "0.25", "0.5", "1")}}
             )
     selections = [{"genome": "g", "individual_means": [1000.0] * 100}]
-    mean, random = innate_start.innate_start_rows({"runs": runs, "selections": selections})
+    results = {"complete": True, "runs": runs, "selections": selections}
+    results["summary"] = innate_start.summarise(runs)
+    results = innate_start.InnateStartResults.model_validate(results)
+    mean, random = innate_start.innate_start_rows(results)
     assert mean.verdict in verdicts.IN_DIRECTION and mean.test.estimate == pytest.approx(
         0.3, abs=0.03
     )
@@ -415,7 +428,10 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
             for (s, a0, a), e in zip(starts, noise, strict=True)
         ]
 
-    twin = {"dataset": "digits", "records": [{"runs": runs()} for _ in range(4)]}
+    records = [{"runs": runs()} for _ in range(4)]
+    twin = {"dataset": "digits", "records": records}
+    twin["summary"] = innate_start_supervised.summarise(records)
+    twin = innate_start_supervised.InnateStartSupervisedResults.model_validate(twin)
     rows = {r.setting: r for r in innate_start_supervised.innate_supervised_rows(twin)}
     # the head start counts over the epoch (a quarter of it: 12.5 and 7.5 points), not after
     area = rows["digits, from individual, over the epoch"].test
@@ -496,8 +512,18 @@ def _network(gap: float, predicted: float) -> dict:
         "scale": 1.0,
         "predicted": predicted,
         "train_cross_entropy": {"gap": gap, "stderr": 1e-4},
+        "train_error_rate": {"gap": 0.0, "stderr": 0.0},
+        "test_error_rate": {"gap": 0.0, "stderr": 0.0},
     }
-    return {"cell_types": [16, 8, 10], "scales": [{**trained, "scale": 0.5}, trained]}
+    return {
+        "cell_types": [16, 8, 10],
+        "scales": [{**trained, "scale": 0.5}, trained],
+        "sigma_mean": 0.01,
+        "accuracy": {"mean_network": 0.9},
+        "hutchinson_probes": 10,
+        "hutchinson": {"value": predicted, "stderr": 1e-4},
+        "layers": [{"layer": "SGBDense_0", "gap": gap, "stderr": 1e-4, "predicted": predicted}],
+    }
 
 
 def test_descent_rows_read_the_end_of_training_against_the_second_order_term():
@@ -505,10 +531,12 @@ def test_descent_rows_read_the_end_of_training_against_the_second_order_term():
     Theorem A.2's conclusion; a network that ends above it contradicts it; the gap at half
     the trained sigma (scale 0.5) is not read."""
     theory = {
-        "trajectories": {"nonconvex": _trajectory(-0.012, 0.0125)},
+        "trajectories": {
+            toy: _trajectory(-0.012, 0.0125) for toy in ("convex", "concave", "nonconvex")
+        },
         "network": [_network(0.0115, 0.008)],
     }
-    toy, network = theory_runs.descent_rows(theory)
+    toy, network = theory_runs.descent_rows(theory_runs.TheoryResults.model_validate(theory))
     assert toy.setting.startswith("1-D double well from mu 0.15, sigma 0.25, after 1 steps")
     assert toy.test.estimate == -0.012 and toy.paper_effect == -0.0125
     assert toy.verdict == verdicts.REPRODUCED

@@ -11,6 +11,8 @@ import numpy as np
 import pytest
 
 from sgb.experiments import rl_spread
+from sgb.experiments.bet_hedging import HedgingGenome
+from sgb.experiments.theory import FixedPoint
 from sgb.plots import (
     COLUMN_IN,
     MIN_FONT_PT,
@@ -141,29 +143,42 @@ BENCH = BenchBackendsResults.model_validate(
         | SPEED,
     }
 )
-SUMMARY = {"median_ratio": 0.95, "log_correlation": 0.91}
-LAYER = {k: np.abs(RNG.normal(size=12)) for k in ("sigma2", "curvature", "curvature_population")}
+SUMMARY = {"median_ratio": 0.95, "log_correlation": 0.91, "ratio_q10": 0.5, "ratio_q90": 2.0}
+LAYER = {
+    k: np.abs(RNG.normal(size=12)).tolist() for k in ("sigma2", "curvature", "curvature_population")
+}
 FIXED = [
-    {
-        "cell_types": types,
-        "runs": [
-            {"epochs": e, "kl_weight": 1e-3, "prior_sigma": 1.0, "sigma2_init": 0.01}
-            | {"layers": {"dense": LAYER}, "summary": {"at_mean": SUMMARY, "population": SUMMARY}}
-            for e in (3, 30, 300)
-        ],
-    }
-    for types in ((None, 8, 10), (4, 4, 10))
+    FixedPoint.model_validate(
+        {
+            "cell_types": types,
+            "runs": [
+                {"epochs": e, "kl_weight": 1e-3, "prior_sigma": 1.0, "sigma2_init": 0.01}
+                | {"population_hessians": 8}
+                | {"accuracy": {"mean_network": 0.9, "population_average": 0.8}}
+                | {"layers": {"dense": LAYER}}
+                | {"summary": {"at_mean": SUMMARY, "population": SUMMARY}}
+                for e in (3, 30, 300)
+            ],
+        }
+    )
+    for types in ([None, 8, 10], [4, 4, 10])
 ]
 RETURNS = {"normal": {k: RNG.normal(size=(20, 3)) for k in ("individuals", "mean_network")}}
 CONDITIONS = ("normal", "long_legs", "slippery", "low_gravity")
-GENOME = {
-    "returns": {
-        p: {c: RNG.normal(1e3, 200, size=(30, 4)) for c in CONDITIONS}
-        for p in ("individuals", "clones")
-    },
-    "rho_init": -3.0,
-    "training_seed": 0,
-}
+SCORE = {"geometric_fitness": 1.0, "mean_fitness": 1.0, "p_at_least": {"0.5": {"10": 0.5}}}
+GENOME = HedgingGenome.model_validate(
+    {
+        "returns": {
+            p: {c: RNG.normal(1e3, 200, size=(30, 4)).tolist() for c in CONDITIONS}
+            for p in ("individuals", "clones")
+        },
+        "rho_init": -3.0,
+        "training_seed": 0,
+        "sigma_trained": 0.1,
+        "scale": 1e3,
+        "scores": {"individuals": SCORE, "clones": SCORE},
+    }
+)
 FRAMES = {name: np.zeros((40, 60, 3)) for name in ("normal", "long legs", "slippery")}
 
 # each figure function on synthetic data of its shape, drawn in its test

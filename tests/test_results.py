@@ -12,6 +12,7 @@ from sgb.experiments import (
     dgb_full,
     fig4_5,
     innate_start,
+    innate_start_supervised,
     mean_gap,
     rl_spread,
     sgb_full,
@@ -161,7 +162,9 @@ def test_innate_start_tables_name_every_start_with_no_list_cells():
         f"{first['return_at_1']:.0f} ± {first['return_at_1_sem']:.0f}"
     )
     sup = raw("innate_start_supervised_fashion-mnist_cpu.json")
-    table = innate_start.innate_start_table(RECORDS("innate_start_supervised"))
+    table = innate_start_supervised.innate_start_supervised_table(
+        RECORDS("innate_start_supervised")
+    )
     row = sup["results"]["summary"][0]
     last = row["steps"][-1]
     shown = table.loc[0, f"step {last} (% accuracy)"]

@@ -399,7 +399,7 @@ def test_experiment_writes_results(tmp_path, monkeypatch):
     toy = results["elbo_toy"]
     assert np.asarray(toy["runs"]["softplus"]["sigma"]).shape == (2, 5)
     assert len(toy["steps"]) == 5 and toy["predicted_sigma"][0] == 0
-    rows = experiment.fixed_point_rows(results["fixed_point"])
+    rows = experiment.fixed_point_rows(experiment.TheoryResults.model_validate(results).fixed_point)
     assert [row["epochs"] for row in rows] == [1, 2] and rows[0]["cell types"] == "4/4/10"
     with pytest.raises(ValueError):
         experiment.run("smoke", tmp_path, dataset="digits")

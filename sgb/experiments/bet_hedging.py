@@ -38,7 +38,7 @@ from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.envs import VARIANTS
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
@@ -197,29 +197,27 @@ HEDGING_Q = "0.5"  # survival: a return of half the mean network's on the normal
 HEDGING_K = "10"  # at least 10 of the 100 members
 
 
-def bet_hedging_rows(results: dict) -> list[Row]:
+def bet_hedging_rows(results: "BetHedgingResults") -> list[Row]:
     """Bet-hedging (``sgb.experiments.bet_hedging``): per initial spread, the genomes'
     individuals against clones of their mean networks on the four conditions, by
     geometric-mean fitness and by the chance that at least ``HEDGING_K`` of them survive
     (a return of ``HEDGING_Q`` of the mean network's on the normal body); a one-sample t
     over the genomes of their differences."""
     rows = []
-    for rho in dict.fromkeys(g["rho_init"] for g in results["genomes"]):
-        genomes = [g for g in results["genomes"] if g["rho_init"] == rho]
+    for rho in dict.fromkeys(g.rho_init for g in results.genomes):
+        genomes = [g for g in results.genomes if g.rho_init == rho]
         if len(genomes) < 2:
             continue
-        scores = [g["scores"] for g in genomes]
-        sigma = np.mean([g["sigma_trained"] for g in genomes])
+        scores = [g.scores for g in genomes]
+        sigma = np.mean([g.sigma_trained for g in genomes])
         setting = f"rho from {rho:g} (trained sigma {sigma:.2g})"
-        n, e = np.shape(genomes[0]["returns"]["individuals"]["normal"])
+        n, e = np.shape(genomes[0].returns.individuals["normal"])
         budget = f"{len(genomes)} genomes, {n} members x {e} episodes x 4 conditions"
-        geometric = [
-            s["individuals"]["geometric_fitness"] - s["clones"]["geometric_fitness"] for s in scores
-        ]
+        geometric = [s.individuals.geometric_fitness - s.clones.geometric_fitness for s in scores]
         rows.append(_across_genomes("ch6.hedging_geometric", setting, geometric, budget))
         survival = [
-            s["individuals"]["p_at_least"][HEDGING_Q][HEDGING_K]
-            - s["clones"]["p_at_least"][HEDGING_Q][HEDGING_K]
+            s.individuals.p_at_least[HEDGING_Q][HEDGING_K]
+            - s.clones.p_at_least[HEDGING_Q][HEDGING_K]
             for s in scores
         ]
         rows.append(_across_genomes("ch6.hedging_survival", setting, survival, budget))
@@ -243,7 +241,7 @@ def _across_genomes(key: str, setting: str, differences, budget: str) -> Row:
     return judge(key, setting, stats.one_sample(differences, 0.0), budget)
 
 
-def bet_hedging(payload: Payload | None) -> dict[str, str]:
+def bet_hedging(payload: "BetHedging | None") -> dict[str, str]:
     """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``) and, per
     initial spread j (0 the narrowest: rho from -5, -3, -1.5), its trained sigma
     (``hedge{j}_sigma``), both populations' mean return over conditions, members and
@@ -256,14 +254,18 @@ def bet_hedging(payload: Payload | None) -> dict[str, str]:
         texts |= row_texts(f"hedge{j}_geometric", None) | row_texts(f"hedge{j}_survival", None)
     if payload is None:
         return texts
-    genomes = payload["results"]["genomes"]
-    card = claims.by_key(bet_hedging_rows(payload["results"]))
-    for j, rho in enumerate(dict.fromkeys(g["rho_init"] for g in genomes)):
-        group = [g for g in genomes if g["rho_init"] == rho]
-        texts[f"hedge{j}_sigma"] = f"{np.mean([g['sigma_trained'] for g in group]):.2g}"
+    genomes = payload.results.genomes
+    card = claims.by_key(bet_hedging_rows(payload.results))
+    for j, rho in enumerate(dict.fromkeys(g.rho_init for g in genomes)):
+        group = [g for g in genomes if g.rho_init == rho]
+        texts[f"hedge{j}_sigma"] = f"{np.mean([g.sigma_trained for g in group]):.2g}"
+        populations = {
+            "individuals": [g.returns.individuals for g in group],
+            "clones": [g.returns.clones for g in group],
+        }
         mean_return = {
-            p: np.mean([np.mean(list(g["returns"][p].values())) for g in group])
-            for p in ("individuals", "clones")
+            p: np.mean([np.mean(list(r.values())) for r in returns])
+            for p, returns in populations.items()
         }
         texts[f"hedge{j}_returns"] = (
             f"{mean_return['individuals']:.0f} for the individuals, "
@@ -279,7 +281,7 @@ def bet_hedging(payload: Payload | None) -> dict[str, str]:
 def evidence(records: Records) -> list[Row]:
     """Individuals against clones of the mean network (``bet_hedging_rows``)."""
     payload = records.get("bet_hedging")
-    return [] if payload is None else bet_hedging_rows(payload["results"])
+    return [] if payload is None else bet_hedging_rows(payload.results)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:

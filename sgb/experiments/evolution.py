@@ -34,7 +34,7 @@ from sgb.evolution import EvolutionConfig, evolve
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.schemas import (
     Accuracy,
     Compression,
@@ -146,39 +146,37 @@ PROFILES: dict[str, EvolutionSweep] = {
 }
 
 
-def evolution_rows(results: dict) -> list[Row]:
+def evolution_rows(results: "EvolutionResults") -> list[Row]:
     """Evolution without gradients (``sgb.experiments.evolution``): per number of hidden
     types, the stochastic genome's individuals (their mean test accuracy) against the
     deterministic genome's network, paired by seed (both start from the same means)."""
-    records = results["records"]
+    records = results.records
     rows = []
-    for k in sorted({r["hidden_types"] for r in records}):
+    for k in sorted({r.hidden_types for r in records}):
         by_seed = {
             stochastic: {
-                r["seed"]: r
-                for r in records
-                if r["hidden_types"] == k and r["stochastic"] is stochastic
+                r.seed: r for r in records if r.hidden_types == k and r.stochastic is stochastic
             }
             for stochastic in (True, False)
         }
         seeds = sorted(set(by_seed[True]) & set(by_seed[False]))
         if len(seeds) < 2:
             continue
-        stochastic = [100 * np.mean(by_seed[True][s]["individuals"]) for s in seeds]
-        deterministic = [100 * by_seed[False][s]["mean_network"] for s in seeds]
+        stochastic = [100 * np.mean(by_seed[True][s].individuals) for s in seeds]
+        deterministic = [100 * by_seed[False][s].mean_network for s in seeds]
         first = by_seed[True][seeds[0]]
         rows.append(
             judge(
                 "ch6.evolution_stochastic_helps",
-                f"{results['dataset']}, {k} hidden types ({first['compression']:.0f}x)",
+                f"{results.dataset}, {k} hidden types ({first.compression:.0f}x)",
                 stats.paired(stochastic, deterministic),
-                f"{len(first['mean_fitness'])} generations, {len(seeds)} seeds",
+                f"{len(first.mean_fitness)} generations, {len(seeds)} seeds",
             )
         )
     return rows
 
 
-def evolution(payload: Payload | None) -> dict[str, str]:
+def evolution(payload: "Evolution | None") -> dict[str, str]:
     """Evolution without gradients (``evolution_digits_cpu.json``): the design
     (``evo_design``), per number of hidden types k the two genomes' test accuracies
     (``evo_k{k}_stochastic``, ``evo_k{k}_deterministic``: mean +- SEM over seeds, %), the
@@ -190,27 +188,27 @@ def evolution(payload: Payload | None) -> dict[str, str]:
         texts |= row_texts(f"evo_k{k}", None)
     if payload is None:
         return texts
-    records = payload["results"]["records"]
-    candidates = payload["provenance"]["config"]["base"]["candidates"]
+    records = payload.results.records
+    candidates = payload.provenance.config.base.candidates
     texts["evo_design"] = (
-        f"{len(records[0]['mean_fitness'])} generations of {candidates} candidate genomes, "
-        f"{len({r['seed'] for r in records})} seeds"
+        f"{len(records[0].mean_fitness)} generations of {candidates} candidate genomes, "
+        f"{len({r.seed for r in records})} seeds"
     )
-    sigma = [r["sigma_mean"] for r in records if r["stochastic"]]
+    sigma = [r.sigma_mean for r in records if r.stochastic]
     texts["evo_sigma"] = f"{min(sigma):.2f} to {max(sigma):.2f}"
     for k in (2, 8):
         for stochastic, name in ((True, "stochastic"), (False, "deterministic")):
             values = np.array(
                 [
-                    100 * np.mean(r["individuals"])
+                    100 * np.mean(r.individuals)
                     for r in records
-                    if r["hidden_types"] == k and r["stochastic"] is stochastic
+                    if r.hidden_types == k and r.stochastic is stochastic
                 ]
             )
             if values.size > 1:
                 sem = values.std(ddof=1) / math.sqrt(values.size)
                 texts[f"evo_k{k}_{name}"] = f"{values.mean():.1f} ± {sem:.1f} %"
-    card = claims.by_key(evolution_rows(payload["results"]))
+    card = claims.by_key(evolution_rows(payload.results))
     for k in (2, 8):
         texts |= row_texts(
             f"evo_k{k}", row_of(card, "ch6.evolution_stochastic_helps", f" {k} hidden")
@@ -221,7 +219,7 @@ def evolution(payload: Payload | None) -> dict[str, str]:
 def evidence(records: Records) -> list[Row]:
     """The stochastic genome against the deterministic one (``evolution_rows``)."""
     payload = records.get("evolution")
-    return [] if payload is None else evolution_rows(payload["results"])
+    return [] if payload is None else evolution_rows(payload.results)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -229,25 +227,25 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return evolution(records("evolution"))
 
 
-def evolution_table(payload: Payload) -> pd.DataFrame:
+def evolution_table(payload: "Evolution") -> pd.DataFrame:
     """Evolution without gradients (``sgb.experiments.evolution``), one row per cell:
     hidden types, compression (ours), genome, seed, the last generation's mean fitness,
     the test accuracy (%) of the evolved genome's individuals (their mean and SD, in
     points) and of its mean network, the evolved spreads' mean sigma and the wall time."""
     return pd.DataFrame(
         {
-            "hidden types": r["hidden_types"],
-            "compression": r["compression"],
-            "genome": "stochastic" if r["stochastic"] else "deterministic",
-            "seed": r["seed"],
-            "last fitness": r["mean_fitness"][-1],
-            "individuals (% accuracy)": 100 * float(np.mean(r["individuals"])),
-            "SD of individuals (points)": 100 * float(np.std(r["individuals"], ddof=1)),
-            "mean network (% accuracy)": 100 * r["mean_network"],
-            "sigma": r["sigma_mean"],
-            "wall time (s)": r["wall_time_s"],
+            "hidden types": r.hidden_types,
+            "compression": r.compression,
+            "genome": "stochastic" if r.stochastic else "deterministic",
+            "seed": r.seed,
+            "last fitness": r.mean_fitness[-1],
+            "individuals (% accuracy)": 100 * float(np.mean(r.individuals)),
+            "SD of individuals (points)": 100 * float(np.std(r.individuals, ddof=1)),
+            "mean network (% accuracy)": 100 * r.mean_network,
+            "sigma": r.sigma_mean,
+            "wall time (s)": r.wall_time_s,
         }
-        for r in payload["results"]["records"]
+        for r in payload.results.records
     )
 
 

@@ -63,10 +63,10 @@ import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
+from pydantic import ConfigDict, Field
 
 from sgb import stats, validation
 from sgb.claims import Row, judge
@@ -74,7 +74,7 @@ from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card, mean_sem, row_of, row_texts
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.rl.agent import NetworkConfig, Params
 from sgb.rl.finetune import individual_key, plain_actor, plain_network
 from sgb.rl.normalizer import Normalizer, init_normalizer
@@ -84,7 +84,17 @@ from sgb.rl.protocols import load_agent
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, checkpoint_root
 from sgb.rl.sweep import sweep_config
 from sgb.rl.trainer import make_trainer
-from sgb.schemas import List, Record, ResultsFile, Return, Seed, Steps
+from sgb.schemas import (
+    Count,
+    Finite,
+    List,
+    NonNegative,
+    Record,
+    ResultsFile,
+    Return,
+    Seed,
+    Steps,
+)
 from sgb.stats import sem
 
 STARTS = ("mean", "best", "random", "fresh")
@@ -379,23 +389,23 @@ def _write(recording: Recording, genomes: _Genomes, runs: list[dict]) -> Path:
     return recording.write(results, config.seeds, parts=selections + runs)
 
 
-def innate_start_rows(results: dict) -> list[Row]:
+def innate_start_rows(results: "InnateStartResults") -> list[Row]:
     """Innate start, then learning on the long-legged Ant (``sgb.experiments.
     innate_start``): per genome and start (mean network, best of 100, random individual),
     the area under its learning curve over the fresh network's of the same seed, less 1;
     a one-sample t over the seeds."""
-    runs = results["runs"]
-    fresh = {r["seed"]: r["auc"] for r in runs if r["start"] == "fresh"}
-    pool = {len(s["individual_means"]) for s in results["selections"]}
+    runs = results.runs
+    fresh = {r.seed: r.auc for r in runs if r.start == "fresh"}
+    pool = {len(s.individual_means) for s in results.selections}
     starts = {
         "mean": "its mean network",
         "best": f"the best of {'/'.join(map(str, sorted(pool)))} individuals",
         "random": "a random individual",
     }
     rows = []
-    for genome, begin in dict.fromkeys((r["genome"], r["start"]) for r in runs):
-        group = [r for r in runs if (r["genome"], r["start"]) == (genome, begin)]
-        gains = [r["auc"] / fresh[r["seed"]] - 1 for r in group if r["seed"] in fresh]
+    for genome, begin in dict.fromkeys((r.genome, r.start) for r in runs):
+        group = [r for r in runs if (r.genome, r.start) == (genome, begin)]
+        gains = [r.auc / fresh[r.seed] - 1 for r in group if r.seed in fresh]
         if begin == "fresh" or len(gains) < 2:
             continue
         rows.append(
@@ -403,27 +413,30 @@ def innate_start_rows(results: dict) -> list[Row]:
                 "ch6.innate_start_rl",
                 f"{genome}, from {starts[begin]}",
                 stats.one_sample(gains, 0.0),
-                f"{len(gains)} seeds of {group[0]['eval_steps'][-1] / 1e6:.1f}M steps",
+                f"{len(gains)} seeds of {group[0].eval_steps[-1] / 1e6:.1f}M steps",
             )
         )
     return rows
 
 
-def innate_start(ant: Payload | None, supervised: Payload | None, card: Card) -> dict[str, str]:
+def innate_start(
+    ant: "InnateStart | None", supervised: ResultsFile | None, card: Card
+) -> dict[str, str]:
     """Innate start, then learning: what of it is committed (``innate_status``); on the
     Ant, each genome's and start's gain in learning-curve area over the fresh network
     (``innate_rl_rows``: estimate, interval and verdict of ``innate_start_rows``);
-    the supervised twin's rows of ``card`` (``innate_sup_{individual,mean}_{area,end}_*``:
+    the supervised twin's (an ``innate_start_supervised.InnateStartSupervised`` record)
+    rows of ``card`` (``innate_sup_{individual,mean}_{area,end}_*``:
     over the epoch and after it)."""
     parts = []
     texts = {"innate_rl_rows": NOT_RUN}
     if ant is None:
         parts.append(f"the Ant runs {NOT_RUN}")
     else:
-        runs = ant["results"]["runs"]
-        state = "complete" if ant["results"]["complete"] else "in progress"
+        runs = ant.results.runs
+        state = "complete" if ant.results.complete else "in progress"
         parts.append(f"{len(runs)} Ant fine-tuning runs committed ({state})")
-        rows = innate_start_rows(ant["results"])
+        rows = innate_start_rows(ant.results)
         if rows:
             texts["innate_rl_rows"] = "; ".join(
                 f"{r.setting}: {r.ours}, **{r.verdict}**" for r in rows
@@ -431,13 +444,13 @@ def innate_start(ant: Payload | None, supervised: Payload | None, card: Card) ->
     if supervised is None:
         parts.append(f"the supervised twin {NOT_RUN}")
     else:
-        summary = supervised["results"]["summary"]
+        summary = supervised.results.summary
         after = ", ".join(
-            f"{r['start']} {_percent_sem(100 * r['accuracy'][-1], r['accuracy_sem'][-1], 100)}"
+            f"{r.start} {_percent_sem(100 * r.accuracy[-1], r.accuracy_sem[-1], 100)}"
             for r in summary
         )
         parts.append(
-            f"the supervised twin on {summary[0]['n_seeds']} seeds, test accuracy after one "
+            f"the supervised twin on {summary[0].n_seeds} seeds, test accuracy after one "
             f"epoch: {after}"
         )
     for origin in ("individual", "mean"):
@@ -458,7 +471,7 @@ def _percent_sem(mean: float, sem: float | None, scale: float = 1.0) -> str:
 def evidence(records: Records) -> list[Row]:
     """Fine-tuning from an innate start on the Ant (``innate_start_rows``)."""
     payload = records.get("innate_start")
-    return [] if payload is None else innate_start_rows(payload["results"])
+    return [] if payload is None else innate_start_rows(payload.results)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -466,31 +479,30 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return innate_start(records.get("innate_start"), records.get("innate_start_supervised"), card)
 
 
-def innate_start_table(payload: Payload) -> pd.DataFrame:
-    """Learning from an innate start, one row per genome and start, means ± SEM over seeds:
-    for the Ant (``sgb.experiments.innate_start``) the return per episode at 0, 1/4, 1/2 and
-    all of the fine-tuning, the mean return over it (area under the curve over its steps) and
-    that less the fresh network's; for Fashion-MNIST
-    (``sgb.experiments.innate_start_supervised``) the test accuracy (%) at each recorded
-    step."""
+def innate_start_table(payload: "InnateStart") -> pd.DataFrame:
+    """Learning from an innate start on the long-legged Ant, one row per genome and start,
+    means ± SEM over seeds: the return per episode at 0, 1/4, 1/2 and all of the
+    fine-tuning, the mean return over it (area under the curve over its steps) and that
+    less the fresh network's."""
     rows = []
-    for s in payload["results"]["summary"]:
-        row = {"start": s["start"]}
-        if "genome" in s:
-            row["genome"] = s["genome"] or "none (fresh network)"
-        row["seeds"] = s["n_seeds"]
-        if "steps" in s:
-            for step, mean, sem in zip(s["steps"], s["accuracy"], s["accuracy_sem"], strict=True):
-                row[f"step {step} (% accuracy)"] = mean_sem(mean, sem, 100.0, 1)
-        else:
-            for at in ("0", "0.25", "0.5", "1"):
-                row[f"return at {at}"] = mean_sem(s[f"return_at_{at}"], s[f"return_at_{at}_sem"])
-            row["mean return over fine-tuning"] = mean_sem(s["auc"], s["auc_sem"])
-            row["less the fresh network's"] = mean_sem(
-                s["auc_minus_fresh"], s["auc_minus_fresh_sem"]
-            )
+    for s in payload.results.summary:
+        row = {"start": s.start, "genome": s.genome or "none (fresh network)", "seeds": s.n_seeds}
+        for at, mean, spread in (
+            ("0", s.return_at_0, s.return_at_0_sem),
+            ("0.25", s.return_at_0_25, s.return_at_0_25_sem),
+            ("0.5", s.return_at_0_5, s.return_at_0_5_sem),
+            ("1", s.return_at_1, s.return_at_1_sem),
+        ):
+            row[f"return at {at}"] = _mean_sem(mean, spread)
+        row["mean return over fine-tuning"] = _mean_sem(s.auc, s.auc_sem)
+        row["less the fresh network's"] = _mean_sem(s.auc_minus_fresh, s.auc_minus_fresh_sem)
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _mean_sem(mean: float | None, sem: float | None) -> str:
+    """``prose.mean_sem`` of a summary's mean and SEM, null (NaN: no runs, one seed) as NaN."""
+    return mean_sem(math.nan if mean is None else mean, math.nan if sem is None else sem)
 
 
 class Selection(Record):
@@ -506,11 +518,34 @@ class InnateRun(Record):
     eval_returns: List[Return]
 
 
+class InnateSummary(Record):
+    """A (genome, start)'s means and SEMs over seeds (null: NaN, one seed or no fresh run);
+    ``return_at_{f}`` at each fraction f of the fine-tuning (its dot an underscore)."""
+
+    model_config = ConfigDict(serialize_by_alias=True)  # dumped as the file writes it
+
+    genome: str | None
+    start: str
+    n_seeds: Count
+    auc: Return
+    auc_sem: NonNegative | None
+    return_at_0: Return
+    return_at_0_sem: NonNegative | None
+    return_at_0_25: Return = Field(alias="return_at_0.25")
+    return_at_0_25_sem: NonNegative | None = Field(alias="return_at_0.25_sem")
+    return_at_0_5: Return = Field(alias="return_at_0.5")
+    return_at_0_5_sem: NonNegative | None = Field(alias="return_at_0.5_sem")
+    return_at_1: Return
+    return_at_1_sem: NonNegative | None
+    auc_minus_fresh: Finite | None
+    auc_minus_fresh_sem: NonNegative | None
+
+
 class InnateStartResults(Record):
     complete: bool
     selections: List[Selection]
     runs: List[InnateRun]
-    summary: List[dict[str, Any]]
+    summary: List[InnateSummary]
 
 
 class InnateStart(ResultsFile):

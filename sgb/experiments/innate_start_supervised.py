@@ -27,6 +27,7 @@ CPU-seconds.
 """
 
 import dataclasses
+import math
 import time
 from pathlib import Path
 from typing import Any
@@ -35,6 +36,7 @@ import flax.linen as nn
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pandas as pd
 
 from sgb import stats, validation
 from sgb.cells import train_cells
@@ -43,6 +45,7 @@ from sgb.classifiers import DenseClassifier, dense_sizes
 from sgb.compression import compression, setting_for_ratio
 from sgb.data import Dataset, load
 from sgb.individuals import individual_kernels
+from sgb.prose import mean_sem
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
@@ -230,21 +233,21 @@ def _write(recording: Recording, records: list[dict]) -> Path:
     return recording.write(results, recording.config.seeds, parts=records)
 
 
-def innate_supervised_rows(results: dict) -> list[Row]:
+def innate_supervised_rows(results: "InnateStartSupervisedResults") -> list[Row]:
     """The supervised twin (``sgb.experiments.innate_start_supervised``): per start
     (individuals, mean network) and measure, the test accuracy less the fresh networks',
     each a seed's mean over its networks, paired by seed. The measures: over the epoch
     (the area under the accuracy curve over the steps, divided by them) and after it."""
-    records = results["records"]
+    records = results.records
     if len(records) < 2:
         return []
 
-    def score(record: dict, origin: str, measure: str) -> float:
-        runs = [r for r in record["runs"] if r["start"] == origin]
+    def score(record: "CurveRuns", origin: str, measure: str) -> float:
+        runs = [r for r in record.runs if r.start == origin]
         if measure == "after one epoch":
-            return 100 * np.mean([r["accuracy"][-1] for r in runs])
-        steps = np.asarray(runs[0]["steps"], dtype=float)
-        curve = np.mean([r["accuracy"] for r in runs], axis=0)
+            return 100 * np.mean([r.accuracy[-1] for r in runs])
+        steps = np.asarray(runs[0].steps, dtype=float)
+        curve = np.mean([r.accuracy for r in runs], axis=0)
         return 100 * float(np.sum(np.diff(steps) * (curve[1:] + curve[:-1]) / 2) / steps[-1])
 
     rows = []
@@ -254,7 +257,7 @@ def innate_supervised_rows(results: dict) -> list[Row]:
             rows.append(
                 judge(
                     "ch6.innate_start_supervised",
-                    f"{results['dataset']}, from {origin}, {measure}",
+                    f"{results.dataset}, from {origin}, {measure}",
                     stats.paired([score(r, origin, measure) for r in records], fresh),
                     f"{len(records)} seeds, one epoch",
                 )
@@ -265,7 +268,20 @@ def innate_supervised_rows(results: dict) -> list[Row]:
 def evidence(records: Records) -> list[Row]:
     """Fine-tuning from an innate start on Fashion-MNIST (``innate_supervised_rows``)."""
     payload = records.get("innate_start_supervised")
-    return [] if payload is None else innate_supervised_rows(payload["results"])
+    return [] if payload is None else innate_supervised_rows(payload.results)
+
+
+def innate_start_supervised_table(payload: "InnateStartSupervised") -> pd.DataFrame:
+    """Learning from an innate start on Fashion-MNIST, one row per start: the test accuracy
+    (%, mean ± SEM over seeds) at each recorded step."""
+    rows = []
+    for s in payload.results.summary:
+        row = {"start": s.start, "seeds": s.n_seeds}
+        for step, mean, spread in zip(s.steps, s.accuracy, s.accuracy_sem, strict=True):
+            spread = math.nan if spread is None else spread  # one seed
+            row[f"step {step} (% accuracy)"] = mean_sem(mean, spread, 100.0, 1)
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
 class CurveOverSteps(Record):

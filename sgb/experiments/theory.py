@@ -20,6 +20,7 @@ from sgb.claims import Row, judge
 from sgb.data import Dataset, digits
 from sgb.genome import softplus
 from sgb.prose import NOT_RUN, Card
+from sgb.provenance import _jsonable
 from sgb.recording import start
 from sgb.results import Records
 from sgb.schemas import (
@@ -480,6 +481,12 @@ def compute(config: TheoryConfig, progress: bool = True) -> dict[str, Any]:
     return results
 
 
+def as_record(results: dict[str, Any]) -> "TheoryResults":
+    """``compute`` output as the record its results file would hold: converted to JSON
+    data as a run writes it (``sgb.provenance``), then checked by the file's model."""
+    return TheoryResults.model_validate(_jsonable(results))
+
+
 def run(profile: str, out_dir: Path, **options: Any) -> Path:
     """Compute chapter 3's numbers at ``profile`` and write ``out_dir/theory_<profile>.json``."""
     if options:
@@ -488,123 +495,123 @@ def run(profile: str, out_dir: Path, **options: Any) -> Path:
     return recording.write(compute(recording.config), seeds=[recording.config.seed])
 
 
-def network_summary(results: dict[str, Any]) -> tuple[list[dict], list[dict]]:
-    """Rows for the chapter's tables, from ``compute`` output or a results file's ``results``:
-    per network at the trained spread (scale 1), and per noisy layer."""
+def network_summary(results: "TheoryResults") -> tuple[list[dict], list[dict]]:
+    """Rows for the chapter's tables, from a results file's record (or ``compute`` output
+    through ``as_record``): per network at the trained spread (scale 1), and per noisy
+    layer."""
     overall, layers = [], []
-    for net in results["network"]:
-        types = "/".join("n" if k is None else str(k) for k in net["cell_types"])
-        base = next(s for s in net["scales"] if s["scale"] == 1.0)
+    for net in results.network:
+        types = "/".join("n" if k is None else str(k) for k in net.cell_types)
+        base = next(s for s in net.scales if s.scale == 1.0)
         overall.append(
             {
                 "cell types": types,
-                "mean sigma": net["sigma_mean"],
-                "mean-network test accuracy": net["accuracy"]["mean_network"],
-                "Delta L cross-entropy (train)": float(base["train_cross_entropy"]["gap"]),
-                "+- SE": float(base["train_cross_entropy"]["stderr"]),
-                "exact 1/2 tr(H diag sigma^2)": float(base["predicted"]),
-                f"Hutchinson, {net['hutchinson_probes']} probes": float(net["hutchinson"]["value"]),
-                "+- SE ": float(net["hutchinson"]["stderr"]),
-                "Delta train error (pp)": 100 * float(base["train_error_rate"]["gap"]),
-                "Delta test error (pp)": 100 * float(base["test_error_rate"]["gap"]),
-                "+- SE  ": 100 * float(base["test_error_rate"]["stderr"]),
+                "mean sigma": net.sigma_mean,
+                "mean-network test accuracy": net.accuracy.mean_network,
+                "Delta L cross-entropy (train)": float(base.train_cross_entropy.gap),
+                "+- SE": float(base.train_cross_entropy.stderr),
+                "exact 1/2 tr(H diag sigma^2)": float(base.predicted),
+                f"Hutchinson, {net.hutchinson_probes} probes": float(net.hutchinson.value),
+                "+- SE ": float(net.hutchinson.stderr),
+                "Delta train error (pp)": 100 * float(base.train_error_rate.gap),
+                "Delta test error (pp)": 100 * float(base.test_error_rate.gap),
+                "+- SE  ": 100 * float(base.test_error_rate.stderr),
             }
         )
-        for layer in net["layers"]:
+        for layer in net.layers:
             layers.append(
                 {
                     "cell types": types,
-                    "noisy layer": layer["layer"],
-                    "measured Delta L (CE)": float(layer["gap"]),
-                    "+- SE": float(layer["stderr"]),
-                    "1/2 sum H_ss sigma_s^2": float(layer["predicted"]),
-                    "measured / predicted": float(layer["gap"]) / float(layer["predicted"]),
+                    "noisy layer": layer.layer,
+                    "measured Delta L (CE)": float(layer.gap),
+                    "+- SE": float(layer.stderr),
+                    "1/2 sum H_ss sigma_s^2": float(layer.predicted),
+                    "measured / predicted": float(layer.gap) / float(layer.predicted),
                 }
             )
     return overall, layers
 
 
-def fixed_point_rows(fixed_points: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Rows for the chapter's table of ``fixed_points`` output (from ``compute`` or a results
-    file): per classifier and training length, accuracy and how close the learned sigma^2
-    lies to c / (H + c lambda), with H at the trained means and averaged over individuals."""
+def fixed_point_rows(fixed_points: list["FixedPoint"]) -> list[dict[str, Any]]:
+    """Rows for the chapter's table of the fixed points (a results file's record, or
+    ``compute`` output through ``as_record``): per classifier and training length, accuracy
+    and how close the learned sigma^2 lies to c / (H + c lambda), with H at the trained
+    means and averaged over individuals."""
     rows = []
     for net in fixed_points:
-        types = "/".join("n" if k is None else str(k) for k in net["cell_types"])
-        for run in net["runs"]:
-            sigma2 = np.concatenate([np.asarray(x["sigma2"]) for x in run["layers"].values()])
-            at_mean, population = run["summary"]["at_mean"], run["summary"]["population"]
+        types = "/".join("n" if k is None else str(k) for k in net.cell_types)
+        for run in net.runs:
+            sigma2 = np.concatenate([np.asarray(x.sigma2) for x in run.layers.values()])
+            at_mean, population = run.summary.at_mean, run.summary.population
             rows.append(
                 {
                     "cell types": types,
-                    "epochs": run["epochs"],
-                    "mean-network test accuracy": run["accuracy"]["mean_network"],
-                    "individuals' test accuracy": run["accuracy"]["population_average"],
+                    "epochs": run.epochs,
+                    "mean-network test accuracy": run.accuracy.mean_network,
+                    "individuals' test accuracy": run.accuracy.population_average,
                     "median learned sigma": float(np.median(np.sqrt(sigma2))),
-                    "median sigma^2 / predicted (H at mu)": at_mean["median_ratio"],
-                    "10-90 % range": f"{at_mean['ratio_q10']:.2f}-{at_mean['ratio_q90']:.2f}",
-                    "log correlation (H at mu)": at_mean["log_correlation"],
-                    "median sigma^2 / predicted (H over individuals)": population["median_ratio"],
-                    "10-90 % range ": (
-                        f"{population['ratio_q10']:.2f}-{population['ratio_q90']:.2f}"
-                    ),
-                    "log correlation (H over individuals)": population["log_correlation"],
+                    "median sigma^2 / predicted (H at mu)": at_mean.median_ratio,
+                    "10-90 % range": f"{at_mean.ratio_q10:.2f}-{at_mean.ratio_q90:.2f}",
+                    "log correlation (H at mu)": at_mean.log_correlation,
+                    "median sigma^2 / predicted (H over individuals)": population.median_ratio,
+                    "10-90 % range ": f"{population.ratio_q10:.2f}-{population.ratio_q90:.2f}",
+                    "log correlation (H over individuals)": population.log_correlation,
                 }
             )
     return rows
 
 
-def theorem_rows(theory: dict) -> list[Row]:
+def theorem_rows(theory: "TheoryResults") -> list[Row]:
     """Theorems A.1 and A.3 on the 1-D toys: the sign of the Jensen gap E[L(w)] - L(mu)
     at the start, from its Monte Carlo estimate."""
     rows = []
-    for toy, name in (("convex", "A.1"), ("concave", "A.3")):
-        t = theory["trajectories"][toy]
-        test = stats.estimate_test("Monte Carlo z", t["gap"][0], t["gap_stderr"][0], 1)
+    toys = theory.trajectories
+    for toy, t, name in (("convex", toys.convex, "A.1"), ("concave", toys.concave, "A.3")):
+        test = stats.estimate_test("Monte Carlo z", t.gap[0], t.gap_stderr[0], 1)
         rows.append(
             judge(
                 f"theorem.{name}",
                 f"1-D {toy} toy",
                 test,
                 "Monte Carlo draws of the toy (see chapter 3)",
-                paper_effect=float(t["prediction"][0]),
+                paper_effect=float(t.prediction[0]),
             )
         )
     rows += descent_rows(theory)
-    if "elbo_toy" in theory:
-        rows += sigma_law_rows(theory["elbo_toy"])
+    if theory.elbo_toy is not None:
+        rows += sigma_law_rows(theory.elbo_toy)
     return rows
 
 
-def descent_rows(theory: dict) -> list[Row]:
+def descent_rows(theory: "TheoryResults") -> list[Row]:
     """Theorem A.2's conclusion, that gradient descent drives the Jensen gap below 0, at the
     end of training: on the double well from chapter 3's start, and on each digits
     classifier at its trained spread (its training cross-entropy). The effect compared
     stands in for a number the appendix does not give: the size of the second-order term
     at that point, on the claim's side."""
-    toy = theory["trajectories"]["nonconvex"]
+    toy = theory.trajectories.nonconvex
     rows = []
     places = [
         (
-            f"1-D double well from mu {toy['mu0']:g}, sigma {toy['sigma0']:g}, after "
-            f"{len(toy['gap']) - 1} steps",
-            toy["gap"][-1],
-            toy["gap_stderr"][-1],
-            toy["prediction"][-1],
+            f"1-D double well from mu {toy.mu0:g}, sigma {toy.sigma0:g}, after "
+            f"{len(toy.gap) - 1} steps",
+            toy.gap[-1],
+            toy.gap_stderr[-1],
+            toy.prediction[-1],
             "Monte Carlo draws of the toy (see chapter 3)",
         )
     ]
-    for network in theory["network"]:
-        types = network["cell_types"]
+    for network in theory.network:
+        types = network.cell_types
         kind = "no types" if all(k is None for k in types) else "/".join(map(str, types)) + " types"
-        trained = next(s for s in network["scales"] if s["scale"] == 1.0)
-        loss = trained["train_cross_entropy"]
+        trained = next(s for s in network.scales if s.scale == 1.0)
+        loss = trained.train_cross_entropy
         places.append(
             (
                 f"digits classifier, {kind}, at its trained sigma, training cross-entropy",
-                loss["gap"],
-                loss["stderr"],
-                trained["predicted"],
+                loss.gap,
+                loss.stderr,
+                trained.predicted,
                 "the trained classifier's Monte Carlo draws (see chapter 3)",
             )
         )
@@ -617,7 +624,7 @@ def descent_rows(theory: dict) -> list[Row]:
     return rows
 
 
-def sigma_law_rows(toy: dict) -> list[Row]:
+def sigma_law_rows(toy: "ElboToy") -> list[Row]:
     """Theorem A.4's sigma step, as the appendix writes it (no entropy term: sigma shrinks to
     0 along positive curvature) against the ELBO the book trains (sigma settles at
     sqrt(c / (H + c lambda))), on the convex toy with the KL on. The effect is where sigma
@@ -625,12 +632,12 @@ def sigma_law_rows(toy: dict) -> list[Row]:
     fixed point (sigma at 0). The interval is sigma's spread over the last quarter of the
     steps (its stationary SD), a conservative one."""
     rows = []
-    runs = toy["runs"]["softplus"]
+    runs = toy.runs.softplus
     for c, predicted, settled, sd in zip(
-        toy["kl_weights"],
-        toy["predicted_sigma"],
-        runs["settled_mean"],
-        runs["settled_sd"],
+        toy.kl_weights,
+        toy.predicted_sigma,
+        runs.settled_mean,
+        runs.settled_sd,
         strict=True,
     ):
         if c <= 0:
@@ -641,7 +648,7 @@ def sigma_law_rows(toy: dict) -> list[Row]:
                 "theorem.A.4",
                 f"1-D convex toy, KL weight {c:g}, sigma = softplus(rho)",
                 test,
-                f"{int(toy['steps'][-1])} gradient steps",
+                f"{int(toy.steps[-1])} gradient steps",
                 paper_effect=-float(predicted),
                 basis=f"sigma at 0: minus the fixed point with the entropy term ({predicted:.3f})",
             )
@@ -672,7 +679,7 @@ def descent(card: Card) -> dict[str, str]:
 def evidence(records: Records) -> list[Row]:
     """Theorems A.1-A.4's rows (``theorem_rows``); none before the theory file is run."""
     payload = records.get("theory")
-    return [] if payload is None else theorem_rows(payload["results"])
+    return [] if payload is None else theorem_rows(payload.results)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -765,6 +772,8 @@ class BothAccuracies(MeanNetworkAccuracy):
 
 class Sigma2(Record):
     sigma2: List[NonNegative]
+    curvature: List[Finite]
+    curvature_population: List[Finite]
 
 
 class FixedPointRun(Record):
@@ -772,6 +781,7 @@ class FixedPointRun(Record):
     kl_weight: NonNegative
     prior_sigma: Positive
     population_hessians: Count
+    sigma2_init: NonNegative
     accuracy: BothAccuracies
     layers: Each(Sigma2)
     summary: Fits

@@ -1,8 +1,8 @@
-"""Chapter 6 figures: evolution without gradients (``sgb.experiments.evolution``) and
-bet-hedging (``sgb.experiments.bet_hedging``)."""
+"""Chapter 6 figures: evolution without gradients (``sgb.experiments.evolution``),
+bet-hedging (``sgb.experiments.bet_hedging``) and fine-tuning from an innate start
+(``sgb.experiments.innate_start_supervised``), each drawn from its results file's record."""
 
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
@@ -10,34 +10,35 @@ import seaborn as sns
 from matplotlib.axes import Axes
 
 from sgb.plots import PALETTE, WIDTH, axes_or_new
+from sgb.schemas import Record
 from sgb.stats import sem
 
 _GENOMES = ((True, "stochastic genome", PALETTE["sgb"]), (False, "deterministic", "#555555"))
 _POPULATIONS = (("individuals", PALETTE["individuals"]), ("clones", PALETTE["mean_network"]))
 
 
-def _cells(records: Sequence[Mapping[str, Any]], k: int, stochastic: bool) -> list:
-    return [r for r in records if r["hidden_types"] == k and r["stochastic"] is stochastic]
+def _cells(records: Sequence[Record], k: int, stochastic: bool) -> list[Record]:
+    return [r for r in records if r.hidden_types == k and r.stochastic is stochastic]
 
 
-def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = None) -> list:
-    """Two panels. Left: fitness (training accuracy of the candidates' individuals, %) per
-    generation, mean over seeds, for each number of hidden types and genome. Right: test
-    accuracy (%) of the evolved genome's individuals (their mean) and of the deterministic
-    genome's network, mean over seeds with SEM error bars and each seed as a dot. Returns
-    the axes."""
+def plot_evolution(results: Record, axes: Sequence[Axes] | None = None) -> list:
+    """``results``: an ``EvolutionResults`` record. Two panels. Left: fitness (training accuracy
+    of the candidates' individuals, %) per generation, mean over seeds, for each number of
+    hidden types and genome. Right: test accuracy (%) of the evolved genome's individuals
+    (their mean) and of the deterministic genome's network, mean over seeds with SEM error
+    bars and each seed as a dot. Returns the axes."""
     curves, bars = axes_or_new(axes, 1, 2, figsize=(WIDTH, 4.4))
-    records = results["records"]
-    ks = sorted({r["hidden_types"] for r in records})
+    records = results.records
+    ks = sorted({r.hidden_types for r in records})
     for j, k in enumerate(ks):
         for i, (stochastic, label, color) in enumerate(_GENOMES):
             cells = _cells(records, k, stochastic)
             if not cells:
                 continue
-            fitness = 100 * np.mean([c["mean_fitness"] for c in cells], axis=0)
+            fitness = 100 * np.mean([c.mean_fitness for c in cells], axis=0)
             style = "-" if j == len(ks) - 1 else ":"
             curves.plot(fitness, style, color=color, lw=1.2, label=f"{label}, {k} types")
-            accuracy = [100 * np.mean(c["individuals"]) for c in cells]
+            accuracy = [100 * np.mean(c.individuals) for c in cells]
             x = j + (i - 0.5) * 0.38
             error = sem(np.asarray(accuracy)) if len(accuracy) > 1 else 0.0
             bars.bar(
@@ -54,7 +55,7 @@ def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = Non
     curves.set_xlabel("generation")
     curves.set_ylabel("fitness: innate training accuracy (%)")
     curves.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18))
-    compression = {r["hidden_types"]: r["compression"] for r in records}
+    compression = {r.hidden_types: r.compression for r in records}
     bars.set_xticks(range(len(ks)), [f"{k} types\n({compression[k]:.0f}x)" for k in ks])
     bars.set_ylabel("innate test accuracy (%)")
     bars.legend(fontsize=8, loc="upper left")
@@ -62,25 +63,26 @@ def plot_evolution(results: Mapping[str, Any], axes: Sequence[Axes] | None = Non
 
 
 def plot_hedging(
-    results: Mapping[str, Any], q: str = "0.5", k: str = "10", axes: Sequence[Axes] | None = None
+    results: Record, q: str = "0.5", k: str = "10", axes: Sequence[Axes] | None = None
 ) -> list:
-    """Two panels, bars per initial spread: the geometric-mean fitness of the individuals
-    and of the clones (the mean network at home = 1), and the chance that at least ``k``
-    members survive (a return of ``q`` of the mean network's at home); means over the
-    spread's genomes with SEM error bars, each genome a dot. Returns the axes."""
+    """``results``: a ``BetHedgingResults`` record. Two panels, bars per initial spread: the
+    geometric-mean fitness of the individuals and of the clones (the mean network at home =
+    1), and the chance that at least ``k`` members survive (a return of ``q`` of the mean
+    network's at home); means over the spread's genomes with SEM error bars, each genome a
+    dot. Returns the axes."""
     fitness, survival = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.6))
-    genomes = results["genomes"]
-    spreads = list(dict.fromkeys(g["rho_init"] for g in genomes))
+    genomes = results.genomes
+    spreads = list(dict.fromkeys(g.rho_init for g in genomes))
     width = 0.8 / len(_POPULATIONS)
     for i, (population, color) in enumerate(_POPULATIONS):
         for j, rho in enumerate(spreads):
-            group = [g["scores"][population] for g in genomes if g["rho_init"] == rho]
+            scores = [g.scores for g in genomes if g.rho_init == rho]
+            group = [s.individuals if population == "individuals" else s.clones for s in scores]
             x, label = j + (i - 0.5) * width, population if j == 0 else None
-            _bar(fitness, x, [s["geometric_fitness"] for s in group], width, color, label)
-            _bar(survival, x, [s["p_at_least"][q][k] for s in group], width, color, label)
+            _bar(fitness, x, [s.geometric_fitness for s in group], width, color, label)
+            _bar(survival, x, [s.p_at_least[q][k] for s in group], width, color, label)
     sigma = {
-        rho: np.mean([g["sigma_trained"] for g in genomes if g["rho_init"] == rho])
-        for rho in spreads
+        rho: np.mean([g.sigma_trained for g in genomes if g.rho_init == rho]) for rho in spreads
     }
     labels = [f"$\\rho$ from {rho:g}\n($\\sigma$ {sigma[rho]:.2g})" for rho in spreads]
     for ax in (fitness, survival):
@@ -99,14 +101,16 @@ def _bar(ax: Axes, x: float, values: list, width: float, color: str, label: str 
     ax.plot(np.full(len(values), x), values, "k.", ms=3)
 
 
-def plot_condition_returns(genome: Mapping[str, Any], ax: Axes | None = None) -> Axes:
-    """One genome: per condition, each member's mean return over its episodes, individuals
-    beside clones of the mean network (box plots, each member a dot). Returns ``ax``."""
+def plot_condition_returns(genome: Record, ax: Axes | None = None) -> Axes:
+    """One genome (a ``HedgingGenome`` record): per condition, each member's mean return over
+    its episodes, individuals beside clones of the mean network (box plots, each member a
+    dot). Returns ``ax``."""
     ax = axes_or_new(ax, figsize=(WIDTH, 3.6))
+    populations = {"individuals": genome.returns.individuals, "clones": genome.returns.clones}
     rows = [
         {"condition": condition.replace("_", " "), "population": population, "return": value}
         for population, _ in _POPULATIONS
-        for condition, returns in genome["returns"][population].items()
+        for condition, returns in populations[population].items()
         for value in np.mean(returns, axis=1)
     ]
     frame = pd.DataFrame(rows)
@@ -116,22 +120,22 @@ def plot_condition_returns(genome: Mapping[str, Any], ax: Axes | None = None) ->
     )
     sns.stripplot(frame, **style, dodge=True, palette=["k"] * 2, size=2, alpha=0.4, legend=False)
     ax.set(xlabel=None, ylabel="mean return of a member")
-    ax.set_title(f"$\\rho$ from {genome['rho_init']:g}, seed {genome['training_seed']}")
+    ax.set_title(f"$\\rho$ from {genome.rho_init:g}, seed {genome.training_seed}")
     ax.legend(fontsize=8)
     return ax
 
 
-def plot_finetune_curves(summary: Sequence[Mapping[str, Any]], ax: Axes | None = None) -> Axes:
-    """Test accuracy (%) against fine-tuning steps, one line per start of ``summary``
-    (``sgb.experiments.innate_start_supervised.summarise``: mean over seeds, with a band
-    of +- SEM where there are several). Returns ``ax``."""
+def plot_finetune_curves(summary: Sequence[Record], ax: Axes | None = None) -> Axes:
+    """Test accuracy (%) against fine-tuning steps, one line per start of ``summary`` (the
+    ``CurveSummary`` records of ``sgb.experiments.innate_start_supervised``: mean over seeds,
+    with a band of +- SEM where there are several). Returns ``ax``."""
     ax = axes_or_new(ax, figsize=(6.0, 3.6))
     colors = {"individual": PALETTE["individuals"], "mean": PALETTE["mean_network"]}
     for row in summary:
-        steps, mean = np.asarray(row["steps"]), 100 * np.asarray(row["accuracy"], dtype=float)
-        color = colors.get(row["start"], PALETTE["baseline"])
-        ax.plot(steps, mean, "o-", color=color, label=f"from {row['start']}")
-        band = 100 * np.asarray([np.nan if s is None else s for s in row["accuracy_sem"]])
+        steps, mean = np.asarray(row.steps), 100 * np.asarray(row.accuracy, dtype=float)
+        color = colors.get(row.start, PALETTE["baseline"])
+        ax.plot(steps, mean, "o-", color=color, label=f"from {row.start}")
+        band = 100 * np.asarray([np.nan if s is None else s for s in row.accuracy_sem])
         ax.fill_between(steps, mean - band, mean + band, color=color, alpha=0.2)
     ax.set_xlabel("fine-tuning steps (one epoch)")
     ax.set_ylabel("test accuracy (%)")

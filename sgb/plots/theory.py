@@ -1,5 +1,7 @@
-"""Figures of chapter 3 (the Jensen gap), drawn from ``sgb.experiments.theory.compute`` results."""
+"""Figures of chapter 3 (the Jensen gap), drawn from ``sgb.experiments.theory.compute``
+results; the fixed points (``fixed_point``) from their records."""
 
+from collections.abc import Sequence
 from typing import Any
 
 import jax.numpy as jnp
@@ -8,6 +10,7 @@ from matplotlib.colors import ListedColormap
 
 from sgb import theory
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
+from sgb.schemas import Record
 
 TITLES = {"convex": "convex", "concave": "concave", "nonconvex": "non-convex"}
 
@@ -239,33 +242,34 @@ def elbo_toy(results: dict[str, Any], ax=None):
     return ax
 
 
-def _fixed_point_points(run: dict[str, Any], field: str) -> tuple[np.ndarray, np.ndarray]:
-    """Learned sigma^2 and the predicted c / (H + c lambda) over a run's type pairs."""
-    sigma2 = np.concatenate([_a(layer["sigma2"]) for layer in run["layers"].values()])
-    curvature = np.concatenate([_a(layer[field]) for layer in run["layers"].values()])
-    predicted = np.asarray(theory.elbo_fixed_point(curvature, run["kl_weight"], run["prior_sigma"]))
+def _fixed_point_points(run: Record, population: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Learned sigma^2 and the predicted c / (H + c lambda) over a run's type pairs, H at the
+    trained means or (``population``) averaged over sampled individuals."""
+    layers = run.layers.values()
+    sigma2 = np.concatenate([_a(layer.sigma2) for layer in layers])
+    curvature = np.concatenate(
+        [_a(layer.curvature_population if population else layer.curvature) for layer in layers]
+    )
+    predicted = np.asarray(theory.elbo_fixed_point(curvature, run.kl_weight, run.prior_sigma))
     return sigma2, predicted
 
 
-def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
+def fixed_point(fixed_points: Sequence[Record], axes=None) -> np.ndarray:
     """Each digits classifier's learned sigma^2 per type pair against c / (H + c lambda):
     top, H at the trained means; bottom, H averaged over sampled individuals; one column
     per classifier (``axes``: (2, classifiers)). One colour per training length; the
-    dashed line is equality, the dotted one sigma^2 at initialisation."""
+    dashed line is equality, the dotted one sigma^2 at initialisation. ``fixed_points``:
+    the ``FixedPoint`` records of ``sgb.experiments.theory`` (a results file's, or
+    ``compute`` output's through its ``as_record``)."""
     n = len(fixed_points)
     axes = axes_or_new(axes, 2, n, figsize=(WIDTH, 7.2), squeeze=False)
     colors = (PALETTE["baseline"], PALETTE["sgb"], PALETTE["dgb"], PALETTE["individuals"])
     for col, net in enumerate(fixed_points):
-        for row, (field, where) in enumerate(
-            (
-                ("curvature", "H at the trained means"),
-                ("curvature_population", "H over individuals"),
-            )
-        ):
+        for row, where in enumerate(("H at the trained means", "H over individuals")):
             ax = axes[row, col]
-            for run, color in zip(net["runs"], colors, strict=False):
-                sigma2, predicted = _fixed_point_points(run, field)
-                summary = run["summary"]["at_mean" if row == 0 else "population"]
+            for run, color in zip(net.runs, colors, strict=False):
+                sigma2, predicted = _fixed_point_points(run, population=row == 1)
+                summary = run.summary.population if row == 1 else run.summary.at_mean
                 ax.scatter(
                     predicted,
                     sigma2,
@@ -274,23 +278,21 @@ def fixed_point(fixed_points: list[dict[str, Any]], axes=None) -> np.ndarray:
                     color=color,
                     rasterized=True,  # thousands of points: as vectors, megabytes of SVG
                     label=(
-                        f"{run['epochs']} epochs: median ratio {summary['median_ratio']:.2f},\n"
-                        f"log corr. {summary['log_correlation']:.2f}"
+                        f"{run.epochs} epochs: median ratio {summary.median_ratio:.2f},\n"
+                        f"log corr. {summary.log_correlation:.2f}"
                     ),
                 )
-            first = net["runs"][0]
-            ax.axhline(
-                first["sigma2_init"], color="grey", ls=":", lw=1, label=r"$\sigma^2$ at init"
-            )
+            first = net.runs[0]
+            ax.axhline(first.sigma2_init, color="grey", ls=":", lw=1, label=r"$\sigma^2$ at init")
             lo, hi = ax.get_xlim()
-            ends = np.array([min(lo, first["sigma2_init"]), hi])
+            ends = np.array([min(lo, first.sigma2_init), hi])
             ax.plot(ends, ends, "k--", lw=1, label="learned = predicted")
             ax.set(
                 xscale="log",
                 yscale="log",
                 xlabel=r"predicted $c / (H + c\lambda)$  (weight$^2$)",
                 ylabel=r"learned $\sigma^2$  (weight$^2$)",
-                title=f"types {types_label(net['cell_types'])}, {where}",
+                title=f"types {types_label(net.cell_types)}, {where}",
             )
             ax.legend(fontsize=8, loc="upper left")
     return axes
