@@ -15,7 +15,6 @@ may be absent, but not null. Lists are non-empty unless ``Maybe``-empty, and a t
 """
 
 import json
-import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated, Any
@@ -31,28 +30,6 @@ class Record(BaseModel):
     """A checked object of a results file: strict, finite, other fields passed through."""
 
     model_config = ConfigDict(extra="allow", allow_inf_nan=False, strict=True, frozen=True)
-
-    # A field read by its name as a key, as a dict is read: for the readers not yet
-    # converted to attributes (refused where SGB_STRICT_RECORDS is set, to find them).
-    def __getitem__(self, key: str) -> Any:
-        _bridge(self, key)
-        try:
-            return getattr(self, key)
-        except AttributeError:
-            raise KeyError(key) from None
-
-    def get(self, key: str, default: Any = None) -> Any:
-        _bridge(self, key)
-        return getattr(self, key, default) if key in self else default
-
-    def __contains__(self, key: str) -> bool:
-        _bridge(self, key)
-        return key in self.model_fields_set or key in (self.model_extra or {})
-
-
-def _bridge(record: Record, key: str) -> None:
-    if os.environ.get("SGB_STRICT_RECORDS"):
-        raise TypeError(f"{type(record).__name__} read as a dict ([{key!r}]): read it by attribute")
 
 
 # Units and bounds --------------------------------------------------------------------------
@@ -187,11 +164,14 @@ class Speeds(Record):
 
 
 class Reach(Speeds):
+    backend: str
     eval_steps: List[Steps]
     eval_returns: List[Return]
 
 
 class BenchBackendsResults(Record):
+    env: str
+    throughput_steps: Count
     throughput: Each(Speeds, "spring", "mjx")
     reach: Reach
 

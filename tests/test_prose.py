@@ -86,8 +86,8 @@ def test_the_texts_are_the_files_values():
     wall = np.mean([r.wall_time_s for r in vanilla])
     assert texts["regime_wall"] == f"{wall / 3600:.1f} h"
     assert texts["regime_steps"] == f"{int(vanilla[0].eval_steps[-1]):,}"  # all digits
-    bench = RECORDS("bench_backends")["results"]["throughput"]
-    ratio = bench["mjx"]["train_steps_per_s"] / bench["spring"]["train_steps_per_s"]
+    bench = RECORDS("bench_backends").results.throughput
+    ratio = bench["mjx"].train_steps_per_s / bench["spring"].train_steps_per_s
     assert prose.backends(RECORDS("bench_backends"))["mjx_vs_spring"] == (f"{ratio:.2f}x")
     fashion = RECORDS("fig2").results
     dense = fashion.ours.summary.dense.mean[0]
