@@ -78,55 +78,6 @@ def test_numbers_carry_the_precision_of_their_interval(estimate, low, high, text
     assert np.isclose(shown[2] - shown[1], high - low, rtol=0.1)
 
 
-def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_land():
-    """Synthetic regime runs with a known fall (16 types at an eighth of vanilla, 128 types
-    at vanilla's level): the fall is reproduced, and its row heads the claim, above the
-    2M-step row; with one seed per arm there is no row."""
-    rng = np.random.default_rng(0)
-    levels = {None: 7000.0, 128: 7000.0, 16: 900.0}
-    runs = [
-        {
-            "cell_types": k,
-            "seed": s,
-            "genome": "authors",
-            "final_return": level + rng.normal(0, 300),
-        }
-        for s in range(3)
-        for k, level in levels.items()
-    ]
-
-    def regime_rows(runs: list[dict]) -> list[claims.Row]:
-        """``regime_rows`` of ``runs``, each completed to a run of the regime's file."""
-        played = {"eval_steps": [0, 1], "train_steps_per_s": 1e4, "wall_time_s": 1.0}
-        records = [
-            regime_runs.RegimeRun.model_validate(
-                r
-                | played
-                | {
-                    "last_two_return": r["final_return"],
-                    "eval_returns": [0.0, r["final_return"]],
-                    "authors_scale": r["final_return"] / 8000,
-                }
-            )
-            for r in runs
-        ]
-        return regime_runs.regime_rows(records, 50_000_000)
-
-    rows = regime_rows(runs)
-    by_key = {r.key: r for r in rows}
-    fall = by_key["fig3.fall_16.regime.ant"]
-    # a fall of about 0.87 of vanilla, measured to within 0.2, is larger than the 0.3 stand-in
-    assert fall.verdict == verdicts.LARGER and fall.test.low > 0.7
-    assert "50M steps" in fall.budget
-    assert regime_rows([r for r in runs if r["seed"] == 0]) == []
-    no_second_16 = [r for r in runs if r["seed"] == 0 or r["cell_types"] != 16]
-    (level,) = regime_rows(no_second_16)
-    assert level.key == "fig3.level_128.regime.ant" and "16 types 1" in level.budget
-    two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
-    (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
-    assert line.headline is fall
-
-
 def test_every_row_says_which_effect_it_compares_and_where_it_comes_from():
     """A row whose effect stands in for a direction says so in words beside the number; a
     row with the paper's own number says it is the paper's; the page shows both."""
@@ -189,3 +140,52 @@ def test_the_page_places_every_claim_of_the_table_once():
         "half",
         claims.CLAIMS["fig4e.r_legs"].statement,
     )
+
+
+def test_figure_3c_at_the_papers_budget_heads_its_claims_once_two_seeds_per_arm_land():
+    """Synthetic regime runs with a known fall (16 types at an eighth of vanilla, 128 types
+    at vanilla's level): the fall is reproduced, and its row heads the claim, above the
+    2M-step row; with one seed per arm there is no row."""
+    rng = np.random.default_rng(0)
+    levels = {None: 7000.0, 128: 7000.0, 16: 900.0}
+    runs = [
+        {
+            "cell_types": k,
+            "seed": s,
+            "genome": "authors",
+            "final_return": level + rng.normal(0, 300),
+        }
+        for s in range(3)
+        for k, level in levels.items()
+    ]
+
+    def regime_rows(runs: list[dict]) -> list[claims.Row]:
+        """``regime_rows`` of ``runs``, each completed to a run of the regime's file."""
+        played = {"eval_steps": [0, 1], "train_steps_per_s": 1e4, "wall_time_s": 1.0}
+        records = [
+            regime_runs.RegimeRun.model_validate(
+                r
+                | played
+                | {
+                    "last_two_return": r["final_return"],
+                    "eval_returns": [0.0, r["final_return"]],
+                    "authors_scale": r["final_return"] / 8000,
+                }
+            )
+            for r in runs
+        ]
+        return regime_runs.regime_rows(records, 50_000_000)
+
+    rows = regime_rows(runs)
+    by_key = {r.key: r for r in rows}
+    fall = by_key["fig3.fall_16.regime.ant"]
+    # a fall of about 0.87 of vanilla, measured to within 0.2, is larger than the 0.3 stand-in
+    assert fall.verdict == verdicts.LARGER and fall.test.low > 0.7
+    assert "50M steps" in fall.budget
+    assert regime_rows([r for r in runs if r["seed"] == 0]) == []
+    no_second_16 = [r for r in runs if r["seed"] == 0 or r["cell_types"] != 16]
+    (level,) = regime_rows(no_second_16)
+    assert level.key == "fig3.level_128.regime.ant" and "16 types 1" in level.budget
+    two_million = _row("fig3.fall_16.ant", verdicts.REPRODUCED)
+    (line,) = [x for x in scorecard.claim_lines([two_million, fall]) if len(x.rows) == 2]
+    assert line.headline is fall

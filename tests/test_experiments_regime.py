@@ -1,0 +1,46 @@
+"""``sgb.experiments.regime``: its rows of the scorecard, its texts and its tables, on the
+committed results and on inputs with known effects."""
+
+from committed import RECORDS, raw
+
+from sgb.experiments import regime as regime_runs
+
+
+def test_the_regime_table_is_the_runs_of_its_file():
+    regime = raw("rl/regime_ant_cpu.json")
+    table = regime_runs.regime_table(RECORDS("regime"))
+    assert list(table.columns) == list(regime_runs.REGIME_COLUMNS.values())
+    assert table["final return"].tolist() == [r["final_return"] for r in regime["results"]["runs"]]
+
+
+def test_regime_without_sgb_arms_says_none():
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
+    summary = regime["results"]["summary"]
+    regime["results"]["summary"] = [s for s in summary if s["cell_types"] is None]
+    assert regime_runs.regime(regime_runs.Regime.model_validate(regime))["regime_sgb"] == "none"
+
+
+def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
+    """With seed 0 alone no row; with two seeds of vanilla and 128 types the level's text
+    is its row's estimate and verdict, and the fall still has none."""
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
+    runs = regime["results"]["runs"]
+    seed0 = {
+        **regime,
+        "results": {**regime["results"], "runs": [r for r in runs if r["seed"] == 0]},
+    }
+    runs_of_seed0 = seed0["results"]["runs"]
+    seed0 = regime_runs.Regime.model_validate(seed0)
+    assert regime_runs.regime(seed0)["regime_level"].startswith("no row yet")
+    second = [
+        {**r, "seed": 1, "final_return": r["final_return"] + 150.0}
+        for r in runs
+        if r["seed"] == 0 and r["cell_types"] in (None, 128)
+    ]
+    both = {**regime, "results": {**regime["results"], "runs": runs_of_seed0 + second}}
+    both = regime_runs.Regime.model_validate(both)
+    steps = regime["provenance"]["config"]["ppo"]["total_steps"]
+    (level,) = regime_runs.regime_rows(both.results.runs, steps)
+    texts = regime_runs.regime(both)
+    assert texts["regime_level"] == f"{level.ours}, **{level.verdict}**"
+    assert texts["regime_fall"].startswith("no row yet")

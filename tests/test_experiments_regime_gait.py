@@ -1,0 +1,24 @@
+"""``sgb.experiments.regime_gait``: its rows of the scorecard, its texts and its tables, on the
+committed results and on inputs with known effects."""
+
+from sgb import prose
+from sgb.experiments import regime_gait
+
+
+def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
+    """Vanilla first, then the most cell types to the fewest; a run below the walking
+    speed is not counted as walking."""
+
+    def run(k, seed, speed):
+        walked = {"cell_types": k, "seed": seed, "forward_velocity": speed, "walks": speed >= 1}
+        return walked | {"genome": "authors", "window_return": 1000.0, "forward_velocity_sem": 0.1}
+
+    runs = [run(16, 0, 0.4), run(None, 1, 7.0), run(128, 0, 8.0), run(None, 0, 7.5)]
+    results = regime_gait.RegimeGaitResults.model_validate({"walking_speed": 1.0, "runs": runs})
+    texts = regime_gait.regime_gait(results)
+    assert texts["gait_runs"] == (
+        "vanilla 7.50, 7.00 m/s (seeds 0, 1); 128 types 8.00 m/s (seed 0); "
+        "16 types 0.40 m/s (seed 0)"
+    )
+    assert texts["gait_walks"] == "3 of the 4 runs walk (at least 1 m/s)"
+    assert set(regime_gait.regime_gait(None).values()) == {prose.NOT_RUN}
