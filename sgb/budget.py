@@ -15,7 +15,7 @@ from sgb.classifiers import dense_sizes
 from sgb.compression import setting_for_ratio
 from sgb.data import Dataset
 from sgb.dgb import DGB, DGBConfig, dgb_for, train_dgb
-from sgb.provenance import _jsonable, git_commit
+from sgb.provenance import git_commit, jsonable
 from sgb.supervised import at_chance, dense_accuracy
 
 
@@ -76,7 +76,7 @@ def train_with_budget(
     _, width = sizes_and_width(config, data)
     dgb_config = dataclasses.replace(config.dgb, gnet_width=width, rounds=config.chunk_rounds)
     dgb = dgb_for(dgb_config, data.x_train.shape[1:], data.num_classes)
-    run = json.loads(json.dumps({"config": _jsonable(config), "gnet_width": width}))
+    run = json.loads(json.dumps({"config": jsonable(config), "gnet_width": width}))
     state, progress = dgb.init(data.x_train), {"records": []}
     if state_file is not None and state_file.exists():
         state, progress = resume.load(

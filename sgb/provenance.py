@@ -58,16 +58,16 @@ def git_commit() -> str:
 NULL_MEANS = "null stands for a value that is not a finite number (e.g. an SEM of one seed)"
 
 
-def _jsonable(value: Any) -> Any:
+def jsonable(value: Any) -> Any:
     """``value`` as strict JSON data: nan and inf become ``None`` (``null``)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {"type": type(value).__name__, **_jsonable(dataclasses.asdict(value))}
+        return {"type": type(value).__name__, **jsonable(dataclasses.asdict(value))}
     if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
+        return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
-        return [_jsonable(v) for v in value]
+        return [jsonable(v) for v in value]
     if hasattr(value, "tolist"):
-        return _jsonable(value.tolist())
+        return jsonable(value.tolist())
     if isinstance(value, float) and not math.isfinite(value):
         return None
     return value
@@ -110,7 +110,7 @@ def provenance(config: Any, profile: str, seeds: list[int], wall_time_s: float) 
     import jax
 
     return {
-        "config": _jsonable(config),
+        "config": jsonable(config),
         "profile": profile,
         "seeds": list(seeds),
         "git_commit": git_commit(),

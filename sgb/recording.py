@@ -24,9 +24,9 @@ from sgb.profiles import check_profile
 from sgb.provenance import (
     CHECKSUM,
     SAME_RUN_FIELDS,
-    _jsonable,
     atomic_write,
     git_commit,
+    jsonable,
     payload_digest,
     provenance,
     read_results,
@@ -44,7 +44,7 @@ def write_results(path: str | Path, results: dict[str, Any], record: dict[str, A
     A file that already holds these results, of the same config, profile and seeds, is
     left as it is: a rerun that reused finished runs, or came out the same, does not
     replace the provenance of the run that made them (its commit, date and wall time)."""
-    payload = {"provenance": _jsonable(record), "results": _jsonable(results)}
+    payload = {"provenance": jsonable(record), "results": jsonable(results)}
     payload["provenance"][CHECKSUM] = payload_digest(payload)
     text = json.dumps(payload, indent=1, sort_keys=False, allow_nan=False) + "\n"
     if not _holds_the_same(path, json.loads(text)):
@@ -79,7 +79,7 @@ def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
             raise CorruptFile(path, problem, RESTART, "results file")
     if "config" not in payload["provenance"]:
         raise CorruptFile(path, "has no config in its provenance", RESTART, "results file")
-    if payload["provenance"]["config"] != json.loads(json.dumps(_jsonable(config))):
+    if payload["provenance"]["config"] != json.loads(json.dumps(jsonable(config))):
         raise ValueError(f"{path} holds results of another config; move it away to run this one")
     return payload["results"]
 

@@ -11,7 +11,7 @@ from sgb.experiments import (
 )
 from sgb.experiments import populations as population_runs
 from sgb.paths import committed_results
-from sgb.provenance import _jsonable
+from sgb.provenance import jsonable
 from sgb.reliability import (
     detectable_between_sd,
     variance_split,
@@ -92,7 +92,7 @@ def _population_summary(rng, mean: float, between_sd: float, within_sd: float, k
         "variance_split": split._asdict(),
         "between_sd": float(np.sqrt(split.between_var)),
     }
-    stored = json.loads(json.dumps(_jsonable(normal)))
+    stored = json.loads(json.dumps(jsonable(normal)))
     return population_runs.PopulationNormal.model_validate(stored)
 
 

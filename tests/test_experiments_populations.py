@@ -17,7 +17,7 @@ from sgb.experiments import (
 )
 from sgb.experiments import populations as population_runs
 from sgb.paths import committed_results
-from sgb.provenance import _jsonable, read_results
+from sgb.provenance import jsonable, read_results
 
 
 def _population(rng, n: int, episodes: int, sd_between: float, sd_within: float, mean=10.0):
@@ -158,7 +158,7 @@ def test_a_smoke_run_resumes_without_evaluating_again(tmp_path, monkeypatch, cap
         for part in populations.PARTS:
             assert np.asarray(record["parts"][part]["returns"]).shape == (4, 3)
         returns = {p: record["parts"][p]["returns"] for p in populations.PARTS}
-        recomputed = json.loads(json.dumps(_jsonable(populations.genome_summary(returns))))
+        recomputed = json.loads(json.dumps(jsonable(populations.genome_summary(returns))))
         assert record["summary"] == recomputed  # the summary is the stored returns' own
     assert results["pooled"]["ours"]["n_genomes"] == 2
     before = path.read_bytes()
@@ -234,7 +234,7 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
             }
     config = populations.populations_config("cpu")
     summarised = populations.summarise({"genomes": genomes}, config)
-    stored = json.loads(json.dumps(_jsonable(summarised)))
+    stored = json.loads(json.dumps(jsonable(summarised)))
     results = populations.PopulationsResults.model_validate(stored)
     rows = {(r.key, r.setting.split(",")[1]): r for r in population_runs.populations_rows(results)}
     for who in (" our genome", " the authors' genome"):
@@ -262,7 +262,7 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     }
     genome = {"training_seed": 0, "parts": {k: {"returns": v.tolist()} for k, v in parts.items()}}
     genome["summary"] = populations.genome_summary(parts)
-    stored = json.loads(json.dumps(_jsonable({"genomes": {"regime": genome}})))
+    stored = json.loads(json.dumps(jsonable({"genomes": {"regime": genome}})))
     rows = population_runs.regime_population_rows(
         populations.RegimePopulationsResults.model_validate(stored)
     )

@@ -17,7 +17,7 @@ from sgb.provenance import read_results
 from sgb.rl import checkpoints
 from sgb.rl.agent import NetworkConfig
 from sgb.rl.finetune import individual_key, plain_actor, plain_network
-from sgb.rl.population import _keys, population_returns
+from sgb.rl.population import population_keys, population_returns
 from sgb.rl.ppo import Start, TrainResult, evaluate, init_state, train
 from sgb.rl.sweep import sweep_config
 from sgb.rl.trainer import make_trainer
@@ -107,14 +107,16 @@ def test_the_plain_actor_of_an_individual_is_that_individual():
 
 def test_the_selection_plays_initial_states_no_evaluation_plays():
     config = innate_start.PROFILES["cpu"]
-    picked = _keys(config.n_individuals, config.selection_episodes, innate_start.SELECTION_SEED)
+    picked = population_keys(
+        config.n_individuals, config.selection_episodes, innate_start.SELECTION_SEED
+    )
     selection = {tuple(k) for k in np.asarray(picked[1]).reshape(-1, 2)}
     assert len(selection) == config.n_individuals * config.selection_episodes
     for seed in config.seeds:
         seeds = innate_start.evaluation_seeds(config.ppo, seed)
         assert len(seeds) == config.ppo.num_evals + 1
         for s in seeds:
-            scored = _keys(config.ppo.eval_individuals, 1, s)[1]
+            scored = population_keys(config.ppo.eval_individuals, 1, s)[1]
             assert selection.isdisjoint(tuple(k) for k in np.asarray(scored).reshape(-1, 2))
     with pytest.raises(ValueError, match="selection"):  # 9_999 + 10_000 + 1 is its seed
         innate_start.InnateStartConfig(config.genomes, config.ppo, (9_999,), 10_000)

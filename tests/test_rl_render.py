@@ -12,7 +12,7 @@ from sgb.experiments import fig3
 from sgb.paths import committed_results
 from sgb.provenance import read_results
 from sgb.rl.envs import EnvSpec
-from sgb.rl.population import _returns
+from sgb.rl.population import episode_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.render import initial_pose, to_gif, walking_frames
 
@@ -54,7 +54,7 @@ def test_walking_frames_tile_individuals_that_move_and_score_them_as_the_populat
     keys = jax.random.split(ind_key, 2)
     args = (ppo.env, ppo.network.architecture, actor, normalizer, keys, reset_keys, 6, None)
     assert returns.shape == (2,) and returns[0] != returns[1]
-    np.testing.assert_allclose(returns, np.asarray(_returns(*args))[:, 0], rtol=1e-4)
+    np.testing.assert_allclose(returns, np.asarray(episode_returns(*args))[:, 0], rtol=1e-4)
     with pytest.raises(ValueError, match="positive"):
         walking_frames(checkpoint, n_individuals=0)
 

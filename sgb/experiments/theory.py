@@ -20,7 +20,7 @@ from sgb.claims import Row, judge
 from sgb.data import Dataset, digits
 from sgb.genome import softplus
 from sgb.prose import NOT_RUN, Card
-from sgb.provenance import _jsonable
+from sgb.provenance import jsonable
 from sgb.recording import start
 from sgb.results import Records
 from sgb.schemas import (
@@ -484,7 +484,7 @@ def compute(config: TheoryConfig, progress: bool = True) -> dict[str, Any]:
 def as_record(results: dict[str, Any]) -> "TheoryResults":
     """``compute`` output as the record its results file would hold: converted to JSON
     data as a run writes it (``sgb.provenance``), then checked by the file's model."""
-    return TheoryResults.model_validate(_jsonable(results))
+    return TheoryResults.model_validate(jsonable(results))
 
 
 def run(profile: str, out_dir: Path, **options: Any) -> Path:

@@ -22,7 +22,7 @@ from sgb.rl.normalizer import Normalizer
 
 
 @partial(jax.jit, static_argnames=("spec", "architecture", "episode_length"))
-def _returns(
+def episode_returns(
     spec: EnvSpec,
     architecture: Architecture,
     actor_params: dict,
@@ -101,7 +101,9 @@ def check_actor_shapes(actor_params: dict, network: NetworkConfig, spec: EnvSpec
     return actor_params
 
 
-def _keys(n_individuals: int, episodes: int, seed: int) -> tuple[jax.Array, jax.Array]:
+def population_keys(n_individuals: int, episodes: int, seed: int) -> tuple[jax.Array, jax.Array]:
+    """The keys of a population's evaluation from ``seed``: one per individual (N, 2) and
+    one per episode's reset (N, E, 2)."""
     validation.integer("n_individuals", n_individuals)
     validation.integer("episodes", episodes)
     validation.seed("seed", seed)
@@ -143,8 +145,8 @@ def population_returns(
     validation.instance("stochastic", stochastic, bool)
     check_actor_shapes(check_actor_params(actor_params), network, spec)
     check_normalizer(normalizer, make_env(spec).observation_size)
-    ind_keys, reset_keys = _keys(n_individuals, episodes, seed)
-    total = _returns(
+    ind_keys, reset_keys = population_keys(n_individuals, episodes, seed)
+    total = episode_returns(
         spec,
         network.architecture,
         actor_params,
