@@ -166,6 +166,16 @@ CLAIMS: dict[str, Claim] = {
             "seeds",
         ),
         Claim(
+            "fig2.monotone",
+            "Figure 2",
+            "performance drops monotonically with increasing compression for both models",
+            "every step to a higher compression loses accuracy",
+            "the smallest drop between adjacent ratios (points)",
+            1.0,
+            ONE_POINT,
+            "seeds",
+        ),
+        Claim(
             "fig2.sgb_declines_slowly",
             "Figure 2",
             "the SGB declines more slowly with compression than the DGB",
@@ -553,6 +563,26 @@ def welch_table(a: dict, b: dict, pairs: list, names: tuple[str, str]) -> pd.Dat
 
 
 COUNTS = {"compression": "our count", "compression_authors": "the authors' count"}
+
+
+def monotone_row(
+    curve: dict[float, np.ndarray], setting: str, budget: str, amount: float | None
+) -> Row | None:
+    """ "Performance drops monotonically with compression" on one model's ``curve`` (ratio
+    -> the seeds' accuracies, fractions): the weakest step, the pair of adjacent ratios
+    whose mean accuracy drops least, its drop in points by Welch's t; monotone where even
+    that step's interval lies above 0. None with fewer than 3 ratios (one step is no
+    trend)."""
+    ratios = sorted(curve)
+    if len(ratios) < 3:
+        return None
+    steps = [
+        stats.welch(100 * curve[a], 100 * curve[b])
+        for a, b in zip(ratios, ratios[1:], strict=False)
+    ]
+    i = min(range(len(steps)), key=lambda j: steps[j].estimate)
+    where = f"{setting}; weakest of {len(steps)} steps, {ratios[i]:.0f}x to {ratios[i + 1]:.0f}x"
+    return judge("fig2.monotone", where, steps[i], budget, amount)
 
 
 def crossover_row(

@@ -25,6 +25,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("title.variability.regime", "title.variability"),
     ("fig2.dgb_better_low",),
     ("fig2.full.sgb_better_high", "fig2.sgb_better_high"),
+    ("fig2.monotone",),
     ("fig2.sgb_declines_slowly",),
     ("fig2.kl_explains_low",),
     ("fig2.full.crossover", "fig2.crossover"),

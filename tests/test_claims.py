@@ -4,6 +4,7 @@ the rule gives those effects, and the committed scorecard gives every claim one 
 import json
 
 import numpy as np
+import pytest
 
 from sgb import claims, gather, verdicts
 from sgb.experiments import (
@@ -109,3 +110,26 @@ def test_the_variability_row_finds_individuals_that_differ_and_rules_out_clones(
     assert noisy.verdict == verdicts.INCONCLUSIVE
     episodes = int(noisy.decide.split()[0])
     assert episodes > 4 and detectable_between_sd(100, episodes, 1000) <= 10.0 * 1.02
+
+
+def test_the_monotone_row_finds_a_steady_decline_and_rules_out_a_rise():
+    """Four ratios, 3 seeds each: a decline of 5 points a step is monotone (its weakest
+    step's interval above 0); a curve that climbs 5 points at one step is not (that step,
+    the weakest, lies below 0); two steps of one point are no trend to judge."""
+    rng = np.random.default_rng(0)
+    noise = 0.002  # 0.2 points between seeds
+
+    def curve(means):
+        return {
+            r: m + noise * rng.standard_normal(3)
+            for r, m in zip((10, 50, 200, 700), means, strict=False)
+        }
+
+    steady = claims.monotone_row(curve([0.9, 0.85, 0.8, 0.75]), "toy", "b", None)
+    assert steady.verdict in (verdicts.REPRODUCED, verdicts.LARGER)
+    assert (
+        steady.test.estimate == pytest.approx(5, abs=1) and "weakest of 3 steps" in steady.setting
+    )
+    rise = claims.monotone_row(curve([0.9, 0.85, 0.9, 0.8]), "toy", "b", None)
+    assert rise.verdict == verdicts.CONTRADICTED and "50x to 200x" in rise.setting
+    assert claims.monotone_row(curve([0.9, 0.89]), "toy", "b", None) is None

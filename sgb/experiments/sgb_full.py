@@ -32,7 +32,16 @@ import pandas as pd
 from tqdm.auto import tqdm
 
 from sgb import runlock, stats, validation
-from sgb.claims import COUNTS, Row, accuracies, crossover_row, judge, nearest_pairs, welch_table
+from sgb.claims import (
+    COUNTS,
+    Row,
+    accuracies,
+    crossover_row,
+    judge,
+    monotone_row,
+    nearest_pairs,
+    welch_table,
+)
 from sgb.classifiers import dense_sizes
 from sgb.data import load
 from sgb.priors import GaussianPrior
@@ -203,6 +212,43 @@ def figure2_full_rows(
                 )
             )
     return rows
+
+
+def full_decline_rows(
+    sgb_full: "SgbFullResults", dgb_full: Record, rounds: int, dataset: str
+) -> list[Row]:
+    """Figure 2's declines at the authors' budgets, for the SGB as the authors train it
+    and the DGB in their layout, over the ratios where at least 2 seeds finished: each
+    model's monotone decline (``monotone_row``), and the SGB's decline against the DGB's
+    over the DGB's range (its lowest to its highest ratio, the SGB at the nearest ratios),
+    Welch's t in points."""
+    cells = [c for c in sgb_full.cells.values() if c.variant == "authors"]
+    sgb = accuracies(cells, "sgb", min_seeds=2)
+    dgb = accuracies(figure2_records(dgb_full, rounds), "dgb", min_seeds=2)
+    seeds = min((v.size for v in [*sgb.values(), *dgb.values()]), default=0)
+    budget = f"{seeds} seeds; {FULL_BUDGET}"
+    setting = f"{dataset}, the authors' budgets"
+    rows = [
+        monotone_row(sgb, f"{setting}, the SGB ({SGB_VARIANTS['authors']})", budget, FULL_EPOCHS),
+        monotone_row(dgb, f"{setting}, the DGB in the authors' layout", budget, FULL_EPOCHS),
+    ]
+    if len(dgb) >= 2 and len(sgb) >= 2:
+        nearest = {d: s for s, d in nearest_pairs(sgb, dgb)}  # DGB ratio -> the SGB's nearest
+        lo_d, hi_d = min(dgb), max(dgb)
+        lo_s, hi_s = nearest[lo_d], nearest[hi_d]
+        decline_s = 100 * (sgb[lo_s].mean() - sgb[hi_s])
+        decline_d = 100 * (dgb[lo_d].mean() - dgb[hi_d])
+        rows.append(
+            judge(
+                "fig2.sgb_declines_slowly",
+                f"{setting}, the DGB {lo_d:.0f}x to {hi_d:.0f}x, "
+                f"the SGB {lo_s:.0f}x to {hi_s:.0f}x",
+                stats.welch(decline_d, decline_s),
+                budget,
+                amount=FULL_EPOCHS,
+            )
+        )
+    return [r for r in rows if r]
 
 
 def figure2_full_crossover(
@@ -458,10 +504,23 @@ def evidence(records: Records) -> list[Row]:
     rounds = dgb.provenance.config.dgb.rounds
     rows = figure2_full_rows(sgb.results, dgb.results, rounds, BOOK_DATASET)
     rows += figure2_full_crossover(sgb.results, dgb.results, rounds, BOOK_DATASET)
+    rows += full_decline_rows(sgb.results, dgb.results, rounds, BOOK_DATASET)
     rows += supervised_population_rows(sgb.results, BOOK_DATASET)
     budget = records.get("dgb_budget")
     share = None if budget is None else kl_share_row(sgb.results, budget.results, BOOK_DATASET)
     return rows + ([share] if share else [])
+
+
+def declines(card: Card) -> dict[str, str]:
+    """Figure 2's declines at the authors' budgets (``full_decline_rows``): each model's
+    weakest step between adjacent ratios (``full_monotone_{sgb,dgb}_*``) and the SGB's
+    decline against the DGB's (``full_decline_*``)."""
+    setting = "the authors' budgets, the"
+    return (
+        row_texts("full_monotone_sgb", row_of(card, "fig2.monotone", f"{setting} SGB"))
+        | row_texts("full_monotone_dgb", row_of(card, "fig2.monotone", f"{setting} DGB"))
+        | row_texts("full_decline", row_of(card, "fig2.sgb_declines_slowly", "authors' budgets"))
+    )
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -471,6 +530,7 @@ def texts(records: Records, card: Card) -> dict[str, str]:
         | figure2_full(records("dgb_full"), card)
         | supervised_population(card)
         | kl_share(card)
+        | declines(card)
     )
 
 
