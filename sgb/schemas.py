@@ -114,6 +114,20 @@ class Provenance(Record):
     backend: str
 
 
+class TotalSteps(Record):
+    total_steps: Count
+
+
+class PpoConfig(Record):
+    ppo: TotalSteps
+
+
+class PpoProvenance(Provenance):
+    """The provenance of a file of PPO runs: its config's ``ppo.total_steps``."""
+
+    config: PpoConfig
+
+
 class StoredTest(Record):
     """A ``sgb.stats.Test`` as a file stores it; a null dof is a normal test."""
 

@@ -29,7 +29,7 @@ from sgb.schemas import (
     Finite,
     List,
     NonNegative,
-    Provenance,
+    PpoProvenance,
     Record,
     ResultsFile,
     Return,
@@ -334,18 +334,6 @@ class Fig3Results(Record):
     runs: List[Fig3Run]
     summary: List[Fig3Summary]
     summary_last_two: List[Fig3Summary] = None
-
-
-class TotalSteps(Record):
-    total_steps: Count
-
-
-class PpoConfig(Record):
-    ppo: TotalSteps
-
-
-class PpoProvenance(Provenance):
-    config: PpoConfig
 
 
 class Fig3(ResultsFile):

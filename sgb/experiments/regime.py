@@ -39,7 +39,7 @@ from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
 from sgb.results import Records
-from sgb.rl.regime_runs import RUNS, run_config, train_regime
+from sgb.rl.regime_runs import RUNS, finished_runs, run_config, train_regime
 from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
 from sgb.schemas import (
@@ -48,7 +48,7 @@ from sgb.schemas import (
     List,
     NonNegative,
     Positive,
-    Provenance,
+    PpoProvenance,
     Record,
     ResultsFile,
     Return,
@@ -94,13 +94,10 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
     with each seed's fraction of the vanilla run of the same seed."""
     config = recording.config
     runs = []
-    for r in config.runs:
-        checkpoint = out_dir / CHECKPOINT_DIR / r.checkpoint(recording.profile)
-        record = finished_run(checkpoint, run_config(config, r))
-        if record is not None:
-            scaled = authors_scale("ant", record["final_return"])
-            run = {"cell_types": r.cell_types, "seed": r.seed, "genome": r.genome}
-            runs.append({**run, "authors_scale": scaled, **record})
+    for r, record in finished_runs(config, recording.profile, out_dir / CHECKPOINT_DIR):
+        scaled = authors_scale("ant", record["final_return"])
+        run = {"cell_types": r.cell_types, "seed": r.seed, "genome": r.genome}
+        runs.append({**run, "authors_scale": scaled, **record})
     results = {
         "env": "ant",
         "complete": len(runs) == len(config.runs),
@@ -256,18 +253,6 @@ class RegimeResults(Record):
     summary: List[RegimeSummary]
 
 
-class TotalSteps(Record):
-    total_steps: Count
-
-
-class PpoConfig(Record):
-    ppo: TotalSteps
-
-
-class RegimeProvenance(Provenance):
-    config: PpoConfig
-
-
 class Regime(ResultsFile):
-    provenance: RegimeProvenance
+    provenance: PpoProvenance
     results: RegimeResults

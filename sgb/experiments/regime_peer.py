@@ -22,8 +22,8 @@ from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card
 from sgb.recording import Recording, start
 from sgb.results import Records
-from sgb.rl.regime_runs import RUNS, RegimeRun, RegimeRuns, run_config, train_regime
-from sgb.rl.runs import CHECKPOINT_DIR, finished_run
+from sgb.rl.regime_runs import RUNS, RegimeRun, RegimeRuns, finished_runs, train_regime
+from sgb.rl.runs import CHECKPOINT_DIR
 from sgb.schemas import (
     Finite,
     List,
@@ -118,12 +118,10 @@ def compare(runs: list[dict]) -> list[dict]:
 def write_peer(recording: Recording, out_dir: Path) -> Path:
     """Write every finished run's learning curve and the comparison with the authors' run."""
     config = recording.config
-    runs = []
-    for r in config.runs:
-        checkpoint = out_dir / PEER_DIR / r.checkpoint(recording.profile)
-        record = finished_run(checkpoint, run_config(config, r))
-        if record is not None:
-            runs.append({"label": r.label, "cell_types": r.cell_types, "seed": r.seed, **record})
+    runs = [
+        {"label": r.label, "cell_types": r.cell_types, "seed": r.seed, **record}
+        for r, record in finished_runs(config, recording.profile, out_dir / PEER_DIR)
+    ]
     results = {"env": "ant", "runs": runs, "comparison": compare(runs)}
     return recording.write(results, sorted({r["seed"] for r in runs}), parts=runs)
 

@@ -10,7 +10,7 @@ from sgb import validation
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import authors_regime, with_settings
-from sgb.rl.runs import checkpoint_name, train_runs
+from sgb.rl.runs import checkpoint_name, finished_run, train_runs
 from sgb.rl.sweep import ppo_settings
 
 GENOMES = ("authors", "authors_aliased")  # a Gaussian per type pair; their aliased layers
@@ -122,6 +122,20 @@ def train_regime(
         for r in config.runs
     ]
     return train_runs(runs, profile, write)
+
+
+def finished_runs(
+    config: RegimeRuns, profile: str, checkpoints: Path
+) -> list[tuple[RegimeRun, dict]]:
+    """Each run of ``config`` whose checkpoint under ``checkpoints`` is finished, with its
+    record (``sgb.rl.runs.finished_run``: learning curve, final return, speed, wall time),
+    in the order of ``config.runs``."""
+    found = []
+    for r in config.runs:
+        record = finished_run(checkpoints / r.checkpoint(profile), run_config(config, r))
+        if record is not None:
+            found.append((r, record))
+    return found
 
 
 RUNS = {p: regime_config(p) for p in PROFILE_NAMES}
