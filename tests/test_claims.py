@@ -6,12 +6,11 @@ import json
 import numpy as np
 import pytest
 
-from sgb import claims, gather, verdicts
+from sgb import claims, verdicts
 from sgb.experiments import (
     fig3,
 )
 from sgb.experiments import populations as population_runs
-from sgb.paths import committed_results
 from sgb.provenance import jsonable
 from sgb.reliability import (
     detectable_between_sd,
@@ -51,19 +50,6 @@ def test_figure3_verdicts_on_sweeps_with_known_falls():
     assert verdict[(0.5, 10)] in verdicts.IN_DIRECTION
     assert verdict[(0.0, 40)] == verdicts.CONTRADICTED
     assert verdict[(0.3, 3)] in (verdicts.INCONCLUSIVE, verdicts.REPRODUCED)
-
-
-def test_the_committed_scorecard_gives_every_claim_one_verdict():
-    rows = gather.scorecard(committed_results())
-    assert {r.verdict for r in rows} <= set(verdicts.VERDICTS)
-    keys = {r.key.split(".")[0] + "." + r.key.split(".")[1] for r in rows}
-    assert {"fig2.sgb_better_high", "fig4e.r_legs", "fig5.population_beats_mean"} <= keys
-    assert len(claims.table(rows)) == len(rows)  # every row names what it tests
-    for r in rows:
-        if r.verdict == verdicts.INCONCLUSIVE:
-            assert r.decide  # the budget that would decide is named
-        if r.verdict == verdicts.NOT_TESTABLE:
-            assert r.test is None and r.decide  # the reason
 
 
 def test_a_crossover_counts_only_the_sgb_overtaking_the_dgb():
