@@ -18,8 +18,6 @@ from sgb.paths import committed_results
 from sgb.provenance import read_results, verify_checksum
 from sgb.schemas import ResultsFile
 
-Payload = ResultsFile  # a results file as its record: .results, .provenance
-
 
 def path(name: str, results_dir: str | Path | None = None) -> Path:
     """Where the results file ``name`` lies under ``results_dir``."""

@@ -47,7 +47,7 @@ from sgb.data import load
 from sgb.priors import GaussianPrior
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.recording import Recording, start
-from sgb.results import Payload, Records
+from sgb.results import Records
 from sgb.schemas import (
     Accuracy,
     Compression,
@@ -396,7 +396,7 @@ def sgb_full(payload: "SgbFull | None") -> dict[str, str]:
     return texts
 
 
-def figure2_full(dgb_payload: Payload | None, card: Card) -> dict[str, str]:
+def figure2_full(dgb_payload: ResultsFile | None, card: Card) -> dict[str, str]:
     """Figure 2 at the authors' budgets: how many of the full-budget DGB's cells have
     finished (``full_dgb_status``) and, at each of its planned ratios r, the scorecard row
     of the SGB as the authors train it against it (``full{r}_verdict``, ``_ours``,
