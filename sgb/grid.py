@@ -22,7 +22,8 @@ state of a run that has finished: committed, they let a fresh clone on another m
 resume every run at the chunk it had reached (``start`` makes its worktree from HEAD).
 
 An experiment joins the queue with a function ``queued(profile, results_dir) -> Queue``
-in its module: its results file and its runs, in the order they train.
+in its module (``sgb.experiments.Experiment.queued_name``): its results file and its
+runs, in the order they train, each with its progress.
 """
 
 import argparse
@@ -38,7 +39,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
-from sgb import cluster, gather, resume, runlock
+from sgb import cluster, gather, runlock
 from sgb.manifest import MAINTAINER_FLAG, add
 from sgb.provenance import atomic_write
 from sgb.queued import Queue
@@ -47,7 +48,7 @@ REPOSITORY = Path(__file__).resolve().parent.parent  # the checkout this package
 GRID_ENV = "SGB_GRID"
 LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
 # The long runs, in the order they train: (experiment, profile).
-QUEUE = (("regime", "cpu"),)
+QUEUE = (("dgb_high", "cpu"), ("sgb_high", "cpu"), ("regime", "cpu"))
 
 
 def worktree() -> Path:
@@ -63,8 +64,9 @@ def queues(
     from sgb.experiments import get_experiment
 
     for name, profile in queue:
-        module = importlib.import_module(f"sgb.experiments.{get_experiment(name).module}")
-        yield name, profile, module.queued(profile, results_dir)
+        experiment = get_experiment(name)
+        module = importlib.import_module(f"sgb.experiments.{experiment.module}")
+        yield name, profile, getattr(module, experiment.queued_name)(profile, results_dir)
 
 
 # --- the workers ------------------------------------------------------------------------
@@ -198,10 +200,7 @@ def describe(queue: Queue) -> list[str]:
     typical = sum(times) / len(times) if times else None
     lines, left = [], 0.0
     for r in queue.runs:
-        chunk, spent = 0, 0.0
-        if not r.finished and r.state.exists():
-            progress = resume.peek(r.state)[1]
-            chunk, spent = progress["chunks"], progress["wall_time_s"]
+        chunk, spent = (0, 0.0) if r.finished else (r.chunks_done, r.spent_s)
         per_chunk = spent / chunk if chunk else (typical / r.chunks if typical else None)
         pid = None if r.finished else runlock.holder(r.checkpoint)
         # a running run is into its current chunk since its state was last written

@@ -1,5 +1,6 @@
 """An experiment's queued runs, as the background queue (``sgb.grid``) lists and lands
-them: each run's checkpoint, state file and chunks, and the experiment's results file."""
+them: each run's checkpoint, state file, chunks and progress, and the experiment's
+results file."""
 
 from dataclasses import dataclass
 from pathlib import Path
@@ -7,9 +8,10 @@ from pathlib import Path
 
 @dataclass(frozen=True)
 class QueuedRun:
-    """One run of a queued experiment: its name, its checkpoint (a ``.msgpack`` with its
-    ``.json`` sidecar), its state file while unfinished, its chunks, and, once finished,
-    its wall time (s)."""
+    """One run of a queued experiment: its name; its checkpoint (a ``.msgpack`` with its
+    ``.json`` sidecar, or for a run whose result goes into the results file, the path its
+    lock is taken on); its state file while unfinished; its chunks; how many it has
+    finished and their wall time (s); and, once finished, its wall time (s)."""
 
     label: str
     checkpoint: Path
@@ -17,6 +19,8 @@ class QueuedRun:
     chunks: int
     finished: bool
     wall_time_s: float | None = None
+    chunks_done: int = 0
+    spent_s: float = 0.0
 
 
 @dataclass(frozen=True)

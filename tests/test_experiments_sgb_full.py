@@ -3,6 +3,7 @@ cells trained once, with the variant's KL counting and rho start, and a rerun th
 only what is missing."""
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -12,6 +13,7 @@ from sgb import (
     supervised_sweep,
     verdicts,
 )
+from sgb.claims import accuracies
 from sgb.experiments import dgb_budget as dgb_budget_runs
 from sgb.experiments import dgb_full as dgb_full_runs
 from sgb.experiments import (
@@ -299,3 +301,38 @@ def test_the_variants_texts_say_a_known_shift_and_a_null_one():
     assert texts["full_rho_shift"].startswith("+0.0 to +0.0 points over 7 ratios (0 of whose")
     assert texts["full_rho_mean_shift"].startswith("+0.0 to +0.0 points over 7 ratios")
     assert texts["full_rho_conclusion"].endswith("at none of the 7 ratios")
+
+
+def test_the_high_end_adds_its_cells_to_the_sweeps_and_counts_a_cell_both_hold_once():
+    """A high end holding a new setting and a repeat of one of the sweep's cells: pooled,
+    the new setting's seeds join the curve and the repeated cell keeps the sweep's value."""
+    sweep = {
+        f"authors_k10_s{s}": {
+            "variant": "authors",
+            "setting": 10,
+            "seed": s,
+            "compression": 395.0,
+            "accuracy": 0.6,
+        }
+        for s in range(2)
+    }
+    high = {
+        "authors_k10_s0": {**sweep["authors_k10_s0"], "accuracy": 0.1},
+        **{
+            f"authors_k3_s{s}": {
+                "variant": "authors",
+                "setting": 3,
+                "seed": s,
+                "compression": 606.0,
+                "accuracy": 0.5,
+            }
+            for s in range(3)
+        },
+    }
+    results = _sgb_full_results(sweep)
+    both = sgb_full_runs.pooled(results, SimpleNamespace(results=_sgb_full_results(high)))
+    curve = accuracies(list(both.cells.values()), "sgb")
+    assert sorted(curve) == [395.0, 606.0]
+    np.testing.assert_allclose(curve[395.0], [0.6, 0.6])
+    assert curve[606.0].size == 3
+    assert sgb_full_runs.pooled(results, None) is results

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from sgb import claims, gather, verdicts
+from sgb import claims, gather, grid, verdicts
 from sgb.experiments import EXPERIMENTS, fig3
 from sgb.paths import committed_results
 from sgb.schemas import ResultsFile
@@ -16,10 +16,16 @@ RUN_MD = Path(__file__).resolve().parent.parent / "book" / "run.md"
 
 
 def test_every_declared_file_is_read_as_the_model_of_its_experiment():
+    """Every declared results file is committed, and read as its experiment's model, but
+    those of queued experiments whose first run has not landed yet."""
     records = gather.records()
+    queued = {name for name, _ in grid.QUEUE}
     for name, source in gather.sources().items():
         for part, file in source.files.items():
-            record = records(name, part)
+            record = records.get(name, part)
+            if record is None:
+                assert name in queued, f"{file} is declared but not committed"
+                continue
             assert isinstance(record, source.model) and isinstance(record, ResultsFile)
             assert gather.model_of(file) is source.model
     assert records("fig3", "ant") is records("fig3", "ant")  # each file read once

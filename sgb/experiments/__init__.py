@@ -42,6 +42,7 @@ class Experiment:
     results: dict[str, str] = field(default_factory=dict)
     record_name: str = ""  # the model of its results files (a pydantic class in its module)
     evidence_name: str = "evidence"  # its scorecard rows: evidence(records) -> list[Row]
+    queued_name: str = "queued"  # its runs for the background queue (``sgb.grid``)
 
     def _module(self):
         return importlib.import_module(f"sgb.experiments.{self.module}")
@@ -166,6 +167,46 @@ EXPERIMENTS: dict[str, Experiment] = {
         shares_runs=True,
         results={"": "sgb_full_fashion-mnist_cpu.json"},
         record_name="SgbFull",
+    ),
+    "dgb_high": Experiment(
+        "dgb_full",
+        "run_high",
+        "HIGH_PROFILES",
+        chapter=4,
+        figure="Fig. 2's high end, the DGB: dgb_full's cells at the g-net widths the authors' "
+        "script builds for the paper's nominal 1,500x and 3,000x, 5 seeds",
+        inputs="fashion-mnist (cpu and paper), digits (smoke)",
+        costs={
+            "smoke": "dgb_full's smoke cell",
+            "cpu": "10 cells, each about 5 minutes of one core (dgb_full's at 700x); "
+            "resumable, and several processes share it",
+            "paper": "the cpu run (the same config)",
+        },
+        shares_runs=True,
+        results={"": "dgb_high_fashion-mnist_cpu.json"},
+        record_name="DgbFull",
+        evidence_name="",
+        queued_name="queued_high",
+    ),
+    "sgb_high": Experiment(
+        "sgb_full",
+        "run_high",
+        "HIGH_PROFILES",
+        chapter=4,
+        figure="Fig. 2's high end, the SGB: sgb_full's authors' SGB at 3, 5, 10 and 20 hidden "
+        "types, 5 seeds",
+        inputs="fashion-mnist (cpu and paper), digits (smoke)",
+        costs={
+            "smoke": "sgb_full's smoke cell, the authors' variant",
+            "cpu": "20 cells, each about 10-15 minutes of one core (sgb_full's at 400x); "
+            "several processes share it",
+            "paper": "the cpu run (the same config)",
+        },
+        shares_runs=True,
+        results={"": "sgb_high_fashion-mnist_cpu.json"},
+        record_name="SgbFull",
+        evidence_name="",
+        queued_name="queued_high",
     ),
     "fig3": Experiment(
         "fig3",

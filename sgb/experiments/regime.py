@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from sgb import claims
+from sgb import claims, resume
 from sgb.claims import REGIME_SETTINGS, Row, figure3_rows, trained_steps
 from sgb.profiles import check_profile
 from sgb.prose import Card, row_texts
@@ -74,15 +74,19 @@ def queued(profile: str, results_dir: Path) -> Queue:
     runs = []
     for r in config.runs:
         checkpoint = Path(results_dir) / CHECKPOINT_DIR / r.checkpoint(profile)
+        state = checkpoint.with_suffix(".state.npz")
         record = finished_run(checkpoint, run_config(config, r))
+        progress = resume.peek(state)[1] if record is None and state.exists() else {}
         runs.append(
             QueuedRun(
                 label=f"{r.label} seed {r.seed}",
                 checkpoint=checkpoint,
-                state=checkpoint.with_suffix(".state.npz"),
+                state=state,
                 chunks=config.ppo.num_evals,
                 finished=record is not None,
                 wall_time_s=None if record is None else record["wall_time_s"],
+                chunks_done=progress.get("chunks", 0),
+                spent_s=progress.get("wall_time_s", 0.0),
             )
         )
     return Queue(results_file(Path(results_dir) / "rl", "regime_ant", profile), tuple(runs))
