@@ -476,6 +476,14 @@ def _num(x: float) -> str:
     return f"{x:.3g}"
 
 
+class Room(NamedTuple):
+    """The largest effect a setting allows in the paper's direction (``size``, in the
+    row's unit) and what bounds it (``bound``, in words)."""
+
+    size: float
+    bound: str
+
+
 def judge(
     key: str,
     setting: str,
@@ -485,21 +493,27 @@ def judge(
     paper_effect: float | None = None,
     basis: str | None = None,
     unit: str | None = None,
+    room: Room | None = None,
 ) -> Row:
     """The row of the claim ``CLAIMS[key]`` in ``setting``, its verdict the rule's on
     ``test``; an inconclusive one names the sample size (in the claim's unit) at which
-    the effect compared becomes detectable. That effect is the claim's, or
-    ``paper_effect`` (with its ``basis``) where the setting sets it, and the unit the
-    claim's or ``unit``. ``amount``: the budget in the paper's unit for the claim's figure
-    (``PAPER_BUDGETS``)."""
+    the effect compared becomes detectable, one with too little ``room`` for that effect
+    the room and its bound. That effect is the claim's, or ``paper_effect`` (with its
+    ``basis``) where the setting sets it, and the unit the claim's or ``unit``.
+    ``amount``: the budget in the paper's unit for the claim's figure (``PAPER_BUDGETS``)."""
     claim = CLAIMS[key]
     effect = claim.paper_effect if paper_effect is None else paper_effect
     if effect is None:
         raise ValueError(f"the claim {key!r} has no effect of its own: pass paper_effect")
-    verdict = verdicts.verdict(test, effect)
+    verdict = verdicts.verdict(test, effect, room=None if room is None else room.size)
     decide = ""
     if verdict == verdicts.INCONCLUSIVE:
         decide = f"{verdicts.units_to_decide(test, effect)} {unit or claim.unit}"
+    elif verdict == verdicts.NO_ROOM:
+        decide = (
+            f"the largest effect possible here is {room.size:.2f} ({room.bound}), "
+            f"below the {abs(effect):g} compared"
+        )
     chosen = claim.basis if basis is None else basis
     return Row(claim, setting, effect, chosen, test, budget, verdict, decide, amount)
 
@@ -656,6 +670,21 @@ REGIME_SETTINGS = {
 }
 
 
+# The return of an agent that gains nothing: the HalfCheetah kept in place, the Ant fallen
+# over at once (its episode then ends); only walking backwards scores below it.
+FLOOR = 0.0
+
+
+def room_above_floor(returns: np.ndarray, scale: float, who: str) -> Room:
+    """How far an arm that should lead (``returns``, its runs' returns) can fall short of
+    itself, in ``scale``'s units, before its rival reaches ``FLOOR``: the largest fall or
+    gap an agent that goes nowhere would show."""
+    return Room(
+        float((returns.mean() - FLOOR) / scale),
+        f"{who} at {returns.mean():.0f}, the floor at {FLOOR:.0f}: an agent that goes nowhere",
+    )
+
+
 def figure3_rows(
     runs: Sequence[Training],
     env: str,
@@ -700,6 +729,7 @@ def figure3_rows(
                     stats.welch(top / scale, bottom / scale),
                     budget,
                     steps,
+                    room=room_above_floor(top, scale, "the 128-type agents"),
                 )
             )
     return rows

@@ -54,6 +54,7 @@ VERDICT_ORDER = (
     verdicts.LARGER,
     verdicts.CONTRADICTED,
     verdicts.INCONCLUSIVE,
+    verdicts.NO_ROOM,
     verdicts.NOT_TESTABLE,
 )
 BADGE_COLOURS = {  # background, text: dark text on light fills, readable in print too
@@ -62,12 +63,14 @@ BADGE_COLOURS = {  # background, text: dark text on light fills, readable in pri
     verdicts.LARGER: ("#e6f2cf", "#3b5410"),
     verdicts.CONTRADICTED: ("#f7d4d4", "#7a1414"),
     verdicts.INCONCLUSIVE: ("#fbecc7", "#6b4a00"),
+    verdicts.NO_ROOM: ("#e4e4e4", "#333333"),
     verdicts.NOT_TESTABLE: ("#e4e4e4", "#333333"),
 }
 SHORT = {
     verdicts.SMALLER: "reproduced, smaller",
     verdicts.LARGER: "reproduced, larger",
     verdicts.INCONCLUSIVE: "inconclusive",
+    verdicts.NO_ROOM: "no room at this budget",
     verdicts.NOT_TESTABLE: "not testable",
 }
 

@@ -11,6 +11,10 @@ The rule, for a claim whose paper effect is ``paper`` against a null ``null`` (n
 - **contradicted**: otherwise, if the interval excludes the paper's effect;
 - **inconclusive at this budget**: neither; the budget that would decide is the sample
   size at which the detectable effect shrinks to the paper's (``units_to_decide``);
+- **not testable at this budget**: whatever the interval, where the largest effect the
+  setting leaves room for (``room``: the distance from the arm that should lead to a floor
+  or a ceiling, in the paper's direction) is below the paper's: no outcome could then show
+  the paper's effect, nor refute it;
 - **not testable here**: no run here can test the claim (a reason is given instead).
 """
 
@@ -27,9 +31,10 @@ SMALLER = "reproduced in direction, smaller than the effect compared"
 LARGER = "reproduced in direction, larger than the effect compared"
 CONTRADICTED = "contradicted"
 INCONCLUSIVE = "inconclusive at this budget"
+NO_ROOM = "not testable at this budget"
 NOT_TESTABLE = "not testable here"
 IN_DIRECTION = (REPRODUCED, SMALLER, LARGER)  # the paper's direction holds
-VERDICTS = (*IN_DIRECTION, CONTRADICTED, INCONCLUSIVE, NOT_TESTABLE)
+VERDICTS = (*IN_DIRECTION, CONTRADICTED, INCONCLUSIVE, NO_ROOM, NOT_TESTABLE)
 
 
 def _effect(test: Test, paper: float, null: float) -> tuple[float, float]:
@@ -42,10 +47,13 @@ def _effect(test: Test, paper: float, null: float) -> tuple[float, float]:
     return paper, null
 
 
-def verdict(test: Test, paper: float, null: float = 0.0) -> str:
+def verdict(test: Test, paper: float, null: float = 0.0, room: float | None = None) -> str:
     """The rule of the module docstring: ``REPRODUCED``, ``SMALLER``, ``LARGER``,
-    ``CONTRADICTED`` or ``INCONCLUSIVE``."""
+    ``CONTRADICTED``, ``INCONCLUSIVE``, or with ``room`` (the largest effect the setting
+    allows, in the paper's direction from the null) below the paper's, ``NO_ROOM``."""
     paper, null = _effect(test, paper, null)
+    if room is not None and validation.real("room", room) < abs(paper - null):
+        return NO_ROOM
     if (paper > null and test.low > null) or (paper < null and test.high < null):
         if paper_inside(test, paper):
             return REPRODUCED

@@ -18,11 +18,11 @@ from sgb.reliability import (
 )
 
 
-def _sweep(fall: float, seeds: int, rng) -> list:
-    """Synthetic Figure 3 runs: vanilla at 4000, 128 types at 3000, 16 at 3000 - fall x
-    4000, seed SD 400."""
+def _sweep(fall: float, seeds: int, rng, level: float = 3000.0) -> list:
+    """Synthetic Figure 3 runs: vanilla at 4000, 128 types at ``level``, 16 at ``level`` -
+    fall x 4000, seed SD 400."""
     runs = []
-    for k, mean in ((None, 4000.0), (128, 3000.0), (16, 3000.0 - fall * 4000)):
+    for k, mean in ((None, 4000.0), (128, level), (16, level - fall * 4000)):
         for seed in range(seeds):
             value = float(rng.normal(mean, 400))
             runs.append(
@@ -50,6 +50,25 @@ def test_figure3_verdicts_on_sweeps_with_known_falls():
     assert verdict[(0.5, 10)] in verdicts.IN_DIRECTION
     assert verdict[(0.0, 40)] == verdicts.CONTRADICTED
     assert verdict[(0.3, 3)] in (verdicts.INCONCLUSIVE, verdicts.REPRODUCED)
+
+
+def test_a_fall_from_an_arm_near_the_floor_has_no_room_to_show_the_papers():
+    """A sweep whose 128-type agents reach 0.2 of vanilla: a fall of 0.3 cannot show there
+    (the 16-type agents would score below an agent that goes nowhere), so no outcome
+    decides and the row says the room; the same sweep at 0.75 of vanilla has room, and
+    its null fall is contradicted."""
+    rng = np.random.default_rng(7)
+
+    def fall_row(level: float) -> tuple[claims.Row, float]:
+        runs = _sweep(0.0, 20, rng, level)
+        (row,) = [r for r in claims.figure3_rows(runs, "ant", 2e6) if "fall" in r.key]
+        top = claims.run_returns(runs, "ours", 128, "last_two_return").mean()
+        return row, top / claims.run_returns(runs, "ours", None, "last_two_return").mean()
+
+    floored, room = fall_row(800.0)
+    assert floored.verdict == verdicts.NO_ROOM and floored.test is not None
+    assert floored.decide.startswith(f"the largest effect possible here is {room:.2f} (")
+    assert fall_row(3000.0)[0].verdict == verdicts.CONTRADICTED
 
 
 def test_a_crossover_counts_only_the_sgb_overtaking_the_dgb():

@@ -55,6 +55,7 @@ def test_a_claims_headline_is_the_first_row_of_its_largest_budget():
         verdicts.LARGER: 0,
         verdicts.CONTRADICTED: 1,
         verdicts.INCONCLUSIVE: 1,
+        verdicts.NO_ROOM: 0,
         verdicts.NOT_TESTABLE: 0,
     }
     with pytest.raises(ValueError, match="belongs to no claim"):

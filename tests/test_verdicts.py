@@ -43,3 +43,17 @@ def test_the_rule_says_how_much_a_reproduced_direction_holds():
         assert verdicts.verdict(measured(0.3 * sign), sign) == verdicts.SMALLER
         assert verdicts.verdict(measured(2.0 * sign), sign) == verdicts.LARGER
         assert verdicts.verdict(measured(1.0 * sign), sign) == verdicts.REPRODUCED
+
+
+def test_an_effect_larger_than_the_setting_allows_is_not_testable_whatever_the_interval():
+    """With room for 0.2 against the paper's 0.3, a measured null (else contradicted) and
+    a measured 0.3 (else reproduced) both get the no-room state; with room for 0.5, the
+    rule is the usual one; mirrored for a negative paper effect."""
+    rng = np.random.default_rng(8)
+    for sign in (1.0, -1.0):
+        null = stats.welch(rng.normal(0.0, 0.1, 200), rng.normal(0.0, 0.1, 200))
+        paper = stats.welch(rng.normal(0.3 * sign, 0.1, 200), rng.normal(0.0, 0.1, 200))
+        for test, usual in ((null, verdicts.CONTRADICTED), (paper, verdicts.REPRODUCED)):
+            assert verdicts.verdict(test, 0.3 * sign) == usual
+            assert verdicts.verdict(test, 0.3 * sign, room=0.5) == usual
+            assert verdicts.verdict(test, 0.3 * sign, room=0.2) == verdicts.NO_ROOM

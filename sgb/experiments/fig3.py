@@ -13,7 +13,15 @@ import numpy as np
 import pandas as pd
 
 from sgb import stats, verdicts
-from sgb.claims import CLAIMS, Row, figure3_rows, judge, run_returns, trained_steps
+from sgb.claims import (
+    CLAIMS,
+    Row,
+    figure3_rows,
+    judge,
+    room_above_floor,
+    run_returns,
+    trained_steps,
+)
 from sgb.profiles import PROFILE_NAMES
 from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import read_results
@@ -157,6 +165,7 @@ def typing_rows(runs: list["Fig3Run"], steps: int, score: str = "last_two_return
                 label,
                 stats.welch(a / vanilla, b / vanilla),
                 f"{steps / 1e6:g}M steps, seeds {a.size} and {b.size}",
+                room=room_above_floor(a, vanilla, "the untyped agents"),
             )
         )
     return rows
