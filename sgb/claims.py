@@ -309,6 +309,18 @@ CLAIMS: dict[str, Claim] = {
             "Monte Carlo units",
         ),
         Claim(
+            "theorem.A.2.saddle",
+            "Theorem A.2",
+            "the means converge to saddle points of the loss, whose negative curvature makes "
+            "the population better than its mean network",
+            "saddle points (no number)",
+            "negative curvature's share N / (N + P) of the second-order term at the means",
+            0.5,
+            "no number given: half, where the negative curvature outweighs the positive and "
+            "the population beats its mean network to second order",
+            "seeds",
+        ),
+        Claim(
             "theorem.A.3",
             "Theorem A.3",
             "on a concave loss the population is better than its mean network (Jensen gap < 0)",

@@ -25,6 +25,7 @@ EVIDENCE = (
     "populations",
     "regime_populations",
     "theory",
+    "saddle",
     "evolution",
     "bet_hedging",
     "innate_start",

@@ -39,6 +39,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("abstract.population_beats_mean_supervised",),
     ("theorem.A.1",),
     ("theorem.A.2",),
+    ("theorem.A.2.saddle",),
     ("theorem.A.3",),
     ("theorem.A.4",),
     ("ch6.evolution_stochastic_helps",),

@@ -88,6 +88,14 @@ class ClassifierConfig:
         validation.instance("local_reparam", self.local_reparam, bool)
 
 
+# Chapter 3's digits classifiers (64 inputs, 32 hidden units, 10 outputs; 2,368 weights):
+# one type per neuron, and 16/8/10 types.
+DIGITS_CLASSIFIERS = (
+    ClassifierConfig(hidden=(32,), cell_types=(None, None, None), epochs=20, learning_rate=3e-3),
+    ClassifierConfig(hidden=(32,), cell_types=(16, 8, 10), epochs=20, learning_rate=3e-3),
+)
+
+
 @dataclasses.dataclass(frozen=True)
 class DenseConfig:
     """The uncompressed deterministic classifier and its training."""

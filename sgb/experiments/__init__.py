@@ -106,6 +106,21 @@ EXPERIMENTS: dict[str, Experiment] = {
         results={"": "theory_cpu.json"},
         record_name="Theory",
     ),
+    "saddle": Experiment(
+        "saddle",
+        chapter=3,
+        figure="beyond Fig. 6: Appendix A.2's saddle points, the whole Hessian at the means of "
+        "chapter 3's digits classifiers",
+        inputs="the digits data (offline); chapter 3's two classifiers, 5 seeds each",
+        costs={
+            "smoke": "2 classifiers x 2 seeds of 2 epochs, not measured",
+            "cpu": "10 networks, each about 5 s to train and 4-8 s for its 2,368 x 2,368 "
+            "Hessian and eigenvalues on one core",
+            "paper": "the cpu run (the same config)",
+        },
+        results={"": "saddle_cpu.json"},
+        record_name="Saddle",
+    ),
     "fig2": Experiment(
         "fig2",
         chapter=4,

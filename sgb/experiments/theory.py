@@ -36,7 +36,7 @@ from sgb.schemas import (
     ResultsFile,
     Steps,
 )
-from sgb.supervised import ClassifierConfig, train_and_evaluate
+from sgb.supervised import DIGITS_CLASSIFIERS, ClassifierConfig, train_and_evaluate
 
 
 @dataclasses.dataclass(frozen=True)
@@ -74,12 +74,7 @@ class TheoryConfig:
     map_sigma0: tuple[float, float, int] = (0.05, 0.8, 20)
     breakdown_mu: tuple[float, ...] = (0.0, 0.4, 1.0)
     breakdown_sigma: tuple[float, float, int] = (0.02, 1.5, 25)
-    classifiers: tuple[ClassifierConfig, ...] = (
-        ClassifierConfig(
-            hidden=(32,), cell_types=(None, None, None), epochs=20, learning_rate=3e-3
-        ),
-        ClassifierConfig(hidden=(32,), cell_types=(16, 8, 10), epochs=20, learning_rate=3e-3),
-    )
+    classifiers: tuple[ClassifierConfig, ...] = DIGITS_CLASSIFIERS
     network_individuals: int = 1000
     sigma_scales: tuple[float, ...] = (0.5, 1.0, 2.0, 4.0, 8.0)
     hutchinson_probes: int = 100

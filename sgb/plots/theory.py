@@ -1,5 +1,6 @@
 """Figures of chapter 3 (the Jensen gap), drawn from ``sgb.experiments.theory.compute``
-results; the fixed points (``fixed_point``) from their records."""
+results; the fixed points (``fixed_point``) and the saddle points (``saddle``) from their
+records."""
 
 from collections.abc import Sequence
 from typing import Any
@@ -8,7 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 from matplotlib.colors import ListedColormap
 
-from sgb import theory
+from sgb import stats, theory
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
 from sgb.schemas import Record
 
@@ -295,4 +296,50 @@ def fixed_point(fixed_points: Sequence[Record], axes=None) -> np.ndarray:
                 title=f"types {types_label(net.cell_types)}, {where}",
             )
             ax.legend(fontsize=8, loc="upper left")
+    return axes
+
+
+def saddle(results: Record, axes=None) -> np.ndarray:
+    """The Hessian at the means of chapter 3's digits classifiers (``sgb.experiments.
+    saddle``'s results): left, each classifier's eigenvalues at its first seed, on a
+    symmetric log axis; right, each classifier's negative-curvature share N / (N + P) of
+    Theorem A.1's second-order term per seed, with their mean and 95 % interval, against
+    the half above which the population would beat its mean network."""
+    axes = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.4))
+    colors = (PALETTE["sgb"], PALETTE["dgb"], PALETTE["baseline"])
+    kinds = list(dict.fromkeys(tuple(n.cell_types) for n in results.networks))
+    for i, (kind, color) in enumerate(zip(kinds, colors, strict=False)):
+        mine = [n for n in results.networks if tuple(n.cell_types) == kind]
+        label = "types " + types_label(kind)
+        spectrum = _a(next(n.eigenvalues for n in mine if n.eigenvalues))
+        edges = np.logspace(-8, 2, 41)
+        up = np.histogram(spectrum[spectrum > 0], edges)[0]
+        down = np.histogram(-spectrum[spectrum < 0], edges)[0]
+        axes[0].stairs(up, edges, color=color, label=f"{label}: positive")
+        axes[0].stairs(-down, edges, color=color, ls=":", label=f"{label}: negative (down)")
+        shares = _a([n.negative_share for n in mine])
+        axes[1].plot(np.full(shares.size, i), shares, "o", color=color, alpha=0.5, mfc="none")
+        if shares.size > 1:
+            mean, low, high = stats.mean_ci(shares)
+            axes[1].errorbar(
+                i + 0.2, mean, yerr=[[mean - low], [high - mean]], fmt="s", color=color
+            )
+    axes[0].axhline(0, color="k", lw=0.5)
+    axes[0].set(
+        xscale="log",
+        xlabel="|eigenvalue| of H at the means (nats per weight$^2$)",
+        ylabel="eigenvalues (count; negative ones down)",
+        title="the Hessian's spectrum, first seed",
+    )
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[1].axhline(0.5, color="k", ls="--", lw=1, label="N = P: the gap's sign turns")
+    axes[1].set(
+        xticks=range(len(kinds)),
+        xticklabels=["types " + types_label(k) for k in kinds],
+        xlim=(-0.5, len(kinds) - 0.5),
+        ylim=(0, 1),
+        ylabel="N / (N + P)",
+        title="negative curvature's share, per seed",
+    )
+    axes[1].legend(fontsize=8, loc="upper right")
     return axes
