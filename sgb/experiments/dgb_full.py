@@ -189,7 +189,8 @@ def train(recording: Recording, progress: bool = True) -> Path:
 def queued_high(profile: str, results_dir: Path) -> Queue:
     """The cells of ``HIGH_PROFILES[profile]`` under ``results_dir``, in the order they
     train, each with the chunks its results file holds, for the background queue
-    (``sgb.grid``)."""
+    (``sgb.grid``). A cell's state (about 10 MB) is landed but not committed
+    (``.gitignore``): a clone trains an unfinished cell again, minutes of one core."""
     sweep = HIGH_PROFILES[check_profile(profile)]
     path = results_file(results_dir, _stem("dgb_high")(sweep), profile)
     cells = read_results(path)["results"]["cells"] if path.exists() else {}
