@@ -26,7 +26,7 @@ SOURCES = {name: e.texts for name, e in EXPERIMENTS.items() if e.texts} | {
 # chapter (its notebook's stem) -> the sources whose texts it glues
 CHAPTERS = {
     "03_jensen_gap": ("theory", "saddle"),
-    "04_dgb_vs_sgb": ("fig2", "mean_gap", "dgb_budget", "sgb_full"),
+    "04_dgb_vs_sgb": ("fig2", "mean_gap", "dgb_budget", "sgb_full", "width"),
     "05_brax_populations": (
         "bench_backends",
         "regime",

@@ -289,6 +289,17 @@ CLAIMS: dict[str, Claim] = {
             "seeds",
         ),
         Claim(
+            "abstract.larger_networks",
+            "Abstract",
+            "stochasticity confers a greater benefit in large networks: at a fixed genome, the "
+            "SGB's lead over the DGB grows with the network",
+            "(the abstract's and the Discussion's claim, drawn from Figure 2's high compressions)",
+            "SGB - DGB test accuracy (points), slope per doubling of the hidden width",
+            1.0,
+            "no number given: a lead that grows by 1 point each time the network doubles",
+            "seeds",
+        ),
+        Claim(
             "theorem.A.1",
             "Theorem A.1",
             "on a convex loss the population is worse than its mean network (Jensen gap > 0)",

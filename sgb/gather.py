@@ -18,6 +18,7 @@ from sgb.results import Records, Source
 EVIDENCE = (
     "fig2",
     "sgb_full",
+    "width",
     "fig3",
     "regime",
     "fig4",

@@ -47,8 +47,10 @@ from sgb.queued import Queue
 REPOSITORY = Path(__file__).resolve().parent.parent  # the checkout this package lies in
 GRID_ENV = "SGB_GRID"
 LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
-# The long runs, in the order they train: (experiment, profile).
-QUEUE = (("dgb_high", "cpu"), ("sgb_high", "cpu"), ("regime", "cpu"))
+# The long runs, in the order they train: (experiment, profile). Figure 3C's regime runs
+# first; the other issues' long runs follow it (Figure 2's high end, then the width sweep).
+# The high end's DGB cells, two hours of one core, went first once and stay there.
+QUEUE = (("dgb_high", "cpu"), ("regime", "cpu"), ("sgb_high", "cpu"), ("width", "cpu"))
 
 
 def worktree() -> Path:

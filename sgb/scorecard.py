@@ -37,6 +37,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("fig4f.r_terrain",),
     ("fig5.population_beats_mean",),
     ("abstract.population_beats_mean_supervised",),
+    ("abstract.larger_networks",),
     ("theorem.A.1",),
     ("theorem.A.2",),
     ("theorem.A.2.saddle",),

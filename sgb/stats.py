@@ -121,6 +121,20 @@ def one_sample(values, null: float) -> Test:
     return _t_test("one-sample t", v.mean(), se, v.size - 1, v.size, null)
 
 
+def slope(x, y) -> Test:
+    """The least-squares slope of ``y`` on ``x`` (the same length, ``x`` not constant), its
+    t test against 0 with n - 2 degrees of freedom (independent errors of one variance)."""
+    x = validation.varying("x", validation.sample("x", x))
+    y = validation.sample("y", y)
+    if x.size != y.size or x.size < 3:
+        raise ValueError(f"x and y need the same length, at least 3, got {x.size} and {y.size}")
+    dx = x - x.mean()
+    b = float(dx @ (y - y.mean()) / (dx @ dx))
+    residual = y - y.mean() - b * dx
+    se = math.sqrt(float(residual @ residual) / (x.size - 2) / float(dx @ dx))
+    return _t_test("least-squares slope t", b, se, x.size - 2, x.size, 0.0)
+
+
 def estimate_test(name: str, estimate: float, stderr: float, n: int) -> Test:
     """A z test of a Monte Carlo estimate with its standard error (normal approximation)."""
     estimate, stderr = validation.real("estimate", estimate), validation.positive("stderr", stderr)

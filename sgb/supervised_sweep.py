@@ -184,6 +184,19 @@ def _comparable(summary: dict[str, dict[str, list]], a: str = "sgb", b: str = "d
 
 # ----------------------------------------------------------------------------- profiles
 
+# The authors' supervised SGB (``supervised_learning/MNIST_SGB.py``; AUTHORS-SETTINGS.md):
+# Adam at 1e-3, batches of 64, three whole-individual draws per minibatch, a Gaussian prior
+# of SD 0.1, the KL per synapse weighted 1/n_train, rho from -7, the paper's 50 epochs.
+AUTHORS_SGB = ClassifierConfig(
+    prior=GaussianPrior(0.1),
+    kl_counting="synapse",
+    kl_scale=1.0,
+    rho_init=-7.0,
+    num_samples=3,
+    learning_rate=1e-3,
+    batch_size=64,
+    epochs=50,
+)
 _SGB_TABLE = ClassifierConfig(
     prior=GaussianPrior(0.1), kl_counting="table", kl_scale=1.0, num_samples=2, epochs=20
 )

@@ -1,9 +1,12 @@
-"""The one loop over a sweep's cells (``sgb.cells.train_cells``), on a toy cell function."""
+"""The one loop over a sweep's cells (``sgb.cells.train_cells``), on a toy cell function,
+alone and shared with another worker."""
 
 import json
+import threading
 
 import pytest
 
+from sgb import runlock
 from sgb.cells import train_cells
 
 KEYS = (lambda cell: cell, lambda record: record["cell"])
@@ -79,3 +82,46 @@ def test_the_records_given_are_kept_in_order_before_the_new(tmp_path, progress):
         progress,
     )
     assert [r["cell"] for r in records] == ["b", "a", "c"]
+
+
+def test_shared_cells_are_each_trained_by_the_one_process_that_takes_them(tmp_path):
+    """Two workers on one sweep: the cell another holds is left to it, the cells it has
+    finished (found in the file when the loop reaches them) are not trained again, and
+    every write keeps the other's records."""
+    path = tmp_path / "sweep.json"
+    path.write_text(json.dumps([{"cell": 1, "value": 1}]))  # the other worker's finished cell
+    trained = []
+
+    def reread():
+        return json.loads(path.read_text())
+
+    def train(cell):
+        trained.append(cell)
+        if cell == 0:  # meanwhile the other worker finishes cell 3
+            path.write_text(json.dumps([*reread(), {"cell": 3, "value": 9}]))
+        return {"cell": cell, "value": cell**2}
+
+    def write(records):
+        path.write_text(json.dumps(records))
+        return path
+
+    def lock(cell):
+        return tmp_path / f"cell{cell}"
+
+    held, release = threading.Event(), threading.Event()
+
+    def other_worker():  # holds cell 2 throughout
+        with runlock.claim(lock(2)):
+            held.set()
+            release.wait(10)
+
+    thread = threading.Thread(target=other_worker)
+    thread.start()
+    held.wait(10)
+    try:
+        train_cells(path, [0, 1, 2, 3, 4], [], KEYS, train, write, "toy", False, (lock, reread))
+    finally:
+        release.set()
+        thread.join()
+    assert trained == [0, 4]
+    assert sorted(r["cell"] for r in reread()) == [0, 1, 3, 4]

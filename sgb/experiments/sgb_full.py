@@ -30,9 +30,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
 
 from sgb import runlock, stats, validation
+from sgb.cells import train_cells
 from sgb.claims import (
     COUNTS,
     Row,
@@ -45,7 +45,6 @@ from sgb.claims import (
 )
 from sgb.classifiers import dense_sizes
 from sgb.data import Dataset, load
-from sgb.priors import GaussianPrior
 from sgb.profiles import check_profile
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import read_results, results_file
@@ -65,6 +64,7 @@ from sgb.schemas import (
 )
 from sgb.supervised import ClassifierConfig
 from sgb.supervised_sweep import (
+    AUTHORS_SGB,
     IMAGE_RATIOS,
     CompressionSweep,
     SweepRecord,
@@ -79,16 +79,6 @@ VARIANTS: dict[str, dict] = {
     "per_pair": {"kl_counting": "table", "rho_init": -7.0},
     "rho_ours": {"kl_counting": "synapse", "rho_init": -5.0},
 }
-AUTHORS_SGB = ClassifierConfig(
-    prior=GaussianPrior(0.1),
-    kl_counting="synapse",
-    kl_scale=1.0,
-    rho_init=-7.0,
-    num_samples=3,
-    learning_rate=1e-3,
-    batch_size=64,
-    epochs=50,
-)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -184,21 +174,37 @@ def train(recording: Recording, progress: bool = True) -> Path:
     full, path = recording.config, recording.path
     data = load(full.dataset, seed=0)
     sizes = layer_sizes(full, data)
-    for variant, (kind, setting, seed) in tqdm(
-        _cells(full, sizes), desc=path.stem, disable=not progress
-    ):
-        name = cell_name(variant, setting, seed)
-        with runlock.claim(cell_lock(path, name)) as mine:
-            with runlock.exclusive(path):
-                done = recording.earlier().get("cells", {})
-            if not mine or name in done:
-                continue
-            record = {"variant": variant, **run_one(kind, setting, seed, data, full.of(variant))}
-            with runlock.exclusive(path):
-                done = recording.earlier().get("cells", {}) | {name: record}
-                _write(recording, sizes, done)
+
+    def name(variant: str, cell: tuple[str, int, int]) -> str:
+        return cell_name(variant, *cell[1:])
+
+    def held() -> list[dict]:
+        return list(recording.earlier().get("cells", {}).values())
+
+    def write(records: list[dict]) -> Path:
+        return _write(recording, sizes, {_name_of(r): r for r in records})
+
+    def train_one(item: tuple[str, tuple[str, int, int]]) -> dict:
+        variant, (kind, setting, seed) = item
+        return {"variant": variant, **run_one(kind, setting, seed, data, full.of(variant))}
+
     with runlock.exclusive(path):
-        return _write(recording, sizes, recording.earlier().get("cells", {}))
+        records = held()
+    return train_cells(
+        path,
+        _cells(full, sizes),
+        records,
+        (lambda item: name(*item), _name_of),
+        train_one,
+        write,
+        path.stem,
+        progress,
+        shared=(lambda item: cell_lock(path, name(*item)), held),
+    )
+
+
+def _name_of(record: dict) -> str:
+    return cell_name(record["variant"], record["setting"], record["seed"])
 
 
 def queued_high(profile: str, results_dir: Path) -> Queue:

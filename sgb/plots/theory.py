@@ -331,7 +331,7 @@ def saddle(results: Record, axes=None) -> np.ndarray:
         ylabel="eigenvalues (count; negative ones down)",
         title="the Hessian's spectrum, first seed",
     )
-    axes[0].legend(fontsize=7, loc="upper right")
+    axes[0].legend(fontsize=8, loc="upper right")
     axes[1].axhline(0.5, color="k", ls="--", lw=1, label="N = P: the gap's sign turns")
     axes[1].set(
         xticks=range(len(kinds)),
