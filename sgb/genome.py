@@ -83,6 +83,12 @@ def mean_sigma(actor_params: dict) -> float:
     return float(np.mean([np.mean(sigma(g)) for g in of_params(actor_params).values()]))
 
 
+def layer_sigmas(actor_params: dict) -> dict[str, float]:
+    """Mean sigma over each SGB layer's type pairs, by the layer's path (none for a
+    network without SGB layers)."""
+    return {path: float(np.mean(sigma(g))) for path, g in of_params(actor_params).items()}
+
+
 def with_tables(params: dict, genome: Genome) -> dict:
     """A copy of the Flax ``{"params": ...}`` tree ``params`` whose layers at the paths of
     ``genome`` hold its tables (``of_params``'s inverse). Each layer's ``mu`` and ``rho``

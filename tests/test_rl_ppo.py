@@ -23,6 +23,7 @@ from scipy import stats as scipy_stats
 
 from sgb import genome
 from sgb.divergence import TrainingDiverged
+from sgb.genome import layer_sigmas
 from sgb.rl import checkpoints
 from sgb.rl.agent import (
     MLP,
@@ -321,9 +322,17 @@ def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one
     trainer = make_trainer(config.step_settings())
     with killed_at_chunk(trainer, 2, monkeypatch), pytest.raises(KeyboardInterrupt):
         train(config, seed=2, progress=False, state_file=state_file)
+    _drop_the_spreads(state_file)  # as a state saved before runs recorded them
     resumed = train(config, seed=2, progress=False, state_file=state_file)
     assert resumed.eval_steps == uninterrupted.eval_steps
     np.testing.assert_array_equal(resumed.eval_returns, uninterrupted.eval_returns)
+    # every evaluation records the actor's spreads, the last those of the final actor; the
+    # chunk saved without them has none
+    assert resumed.eval_sigmas[0] is None
+    assert resumed.eval_sigmas[1:] == uninterrupted.eval_sigmas[1:]
+    assert len(resumed.eval_sigmas) == len(resumed.eval_steps)
+    assert resumed.eval_sigmas[-1] == layer_sigmas(resumed.params.actor)
+    assert set(resumed.eval_sigmas[-1]) == set(genome.of_params(resumed.params.actor)) != set()
     for a, b in zip(
         jax.tree_util.tree_leaves(resumed.params),
         jax.tree_util.tree_leaves(uninterrupted.params),
@@ -336,6 +345,17 @@ def test_killed_run_resumes_from_its_state_file_and_ends_as_an_uninterrupted_one
     )
     with pytest.raises(ValueError, match="another run"):
         train(config, seed=3, progress=False, state_file=state_file)
+
+
+def _drop_the_spreads(state_file) -> None:
+    """Rewrite a training state's progress without its ``eval_sigmas``."""
+    with np.load(state_file) as data:
+        arrays = {name: data[name] for name in data.files}
+    meta = json.loads(str(arrays["meta"]))
+    del meta["progress"]["eval_sigmas"]
+    arrays["meta"] = np.array(json.dumps(meta))
+    with open(state_file, "wb") as out:
+        np.savez(out, **arrays)
 
 
 @SHARED_STEP

@@ -98,6 +98,7 @@ def save(path: str | Path, result: TrainResult, record: dict[str, Any] | None = 
         "config": _config_dict(result.config),
         "eval_steps": result.eval_steps,
         "eval_returns": result.eval_returns,
+        "eval_sigmas": result.eval_sigmas,
         "train_steps_per_s": result.train_steps_per_s,
         "wall_time_s": result.wall_time_s,
         "provenance": record or {},

@@ -20,6 +20,7 @@ from tqdm.auto import tqdm
 
 from sgb import resume, validation
 from sgb.divergence import Guard, likely_cause
+from sgb.genome import layer_sigmas
 from sgb.rl.agent import Individual, NetworkConfig, Params
 from sgb.rl.envs import EnvSpec
 from sgb.rl.losses import LossSettings
@@ -162,6 +163,9 @@ class TrainResult:
     eval_returns: list[float]
     train_steps_per_s: float
     wall_time_s: float
+    # per evaluation, the actor's mean sigma per SGB layer (``genome.layer_sigmas``); None
+    # for an evaluation made before runs recorded it
+    eval_sigmas: list[dict[str, float] | None] = field(default_factory=list)
 
 
 def _keys(seed: int) -> list[jax.Array]:
@@ -329,11 +333,14 @@ def train(
             progress_keys=tuple(done),
             finite=lambda ts: (ts.params, ts.normalizer),
         )
+        # a state saved before runs recorded their spreads has none for its chunks
+        done.setdefault("eval_sigmas", [None] * len(done["eval_steps"]))
         ts = (
             kept._replace(env_state=ts.env_state, start_state=ts.start_state)
             if (config.regime == "authors")
             else kept
         )
+    done.setdefault("eval_sigmas", [])
     holder = {"ts": ts}
     guard = _guard(holder)
     chunk = max(1, config.iterations // config.num_evals)
@@ -343,6 +350,7 @@ def train(
         done["eval_steps"].append(0)
         first_return = evaluate(config, ts.params, ts.normalizer, seed + 9_999, last=False)
         done["eval_returns"].append(first_return)
+        done["eval_sigmas"].append(layer_sigmas(ts.params.actor))
     for i in tqdm(
         range(first, config.num_evals),
         desc=label,
@@ -361,6 +369,7 @@ def train(
         last = i + 1 == config.num_evals
         ret = evaluate(config, ts.params, ts.normalizer, seed + 10_000 + i, last=last)
         done["eval_returns"].append(ret)
+        done["eval_sigmas"].append(layer_sigmas(ts.params.actor))
         done["chunks"] = i + 1
         if state_file is not None:
             elapsed = done["wall_time_s"] + time.perf_counter() - start
@@ -373,4 +382,5 @@ def train(
         eval_returns=done["eval_returns"],
         train_steps_per_s=done["timed_steps"] / max(done["timed_s"], 1e-9),
         wall_time_s=done["wall_time_s"] + time.perf_counter() - start,
+        eval_sigmas=done["eval_sigmas"],
     )

@@ -112,6 +112,7 @@ def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
         "last_two_return": float(np.mean(returns[-2:])),
         **{key: meta[key] for key in ("eval_steps", "eval_returns", "train_steps_per_s")},
         "wall_time_s": meta["wall_time_s"],
+        **({"eval_sigmas": meta["eval_sigmas"]} if meta.get("eval_sigmas") else {}),
         "git_commit": trained.get("git_commit", "not recorded"),
         "date": trained.get("date", "not recorded"),
         "checkpoint": checkpoint.name,
