@@ -1,9 +1,15 @@
 """``sgb.experiments.regime``: its rows of the scorecard, its texts and its tables, on the
 committed results and on inputs with known effects."""
 
+import numpy as np
+import pytest
 from committed import RECORDS, raw
 
+from sgb import genome
 from sgb.experiments import regime as regime_runs
+from sgb.provenance import read_results
+from sgb.rl import checkpoints
+from sgb.rl.runs import CHECKPOINT_DIR
 
 
 def test_the_regime_table_is_the_runs_of_its_file():
@@ -44,3 +50,23 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
     texts = regime_runs.regime(both)
     assert texts["regime_level"] == f"{level.ours}, **{level.verdict}**"
     assert texts["regime_fall"].startswith("no row yet")
+
+
+def test_a_smoke_regime_records_each_sgb_runs_spreads_against_its_means(tmp_path):
+    """A smoke regime run writes, for its SGB run, each layer's mean sigma and mean |mu|
+    as its checkpoint's actor holds them: at 320 steps sigma is still near its birth,
+    softplus(-7), far below |mu|; the chapter's texts say both."""
+    path = regime_runs.run("smoke", tmp_path)
+    record = regime_runs.Regime.model_validate(read_results(path))
+    (sgb,) = [r for r in record.results.runs if r.cell_types is not None]
+    _, params, _, _ = checkpoints.load(tmp_path / CHECKPOINT_DIR / sgb.checkpoint)
+    tables = genome.of_params(params.actor)
+    assert [x.layer for x in sgb.layers] == list(tables)
+    for layer in sgb.layers:
+        g = tables[layer.layer]
+        assert layer.mean_sigma == pytest.approx(float(np.mean(genome.sigma(g))))
+        assert layer.mean_abs_mu == pytest.approx(float(np.mean(np.abs(g.mu))))
+        assert 0.5 < layer.mean_sigma / float(genome.softplus(-7.0)) < 2
+    texts = regime_runs.spreads(record)
+    assert texts["regime_birth_sigma"].startswith(f"{float(genome.softplus(-7.0)):.2g} (rho -7")
+    assert f"({1} runs, {len(sgb.layers)} layers)" in texts["regime_spreads"]

@@ -33,12 +33,14 @@ import pandas as pd
 
 from sgb import claims, resume
 from sgb.claims import REGIME_SETTINGS, Row, figure3_rows, trained_steps
+from sgb.genome import of_params, sigma, softplus
 from sgb.profiles import check_profile
-from sgb.prose import Card, row_texts
+from sgb.prose import NOT_RUN, Card, row_texts
 from sgb.provenance import results_file
 from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
 from sgb.results import Records
+from sgb.rl import checkpoints
 from sgb.rl.regime_runs import RUNS, finished_runs, run_config, train_regime
 from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
@@ -46,6 +48,7 @@ from sgb.schemas import (
     Count,
     Finite,
     List,
+    MaybeEmpty,
     NonNegative,
     Positive,
     PpoProvenance,
@@ -101,6 +104,8 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
     for r, record in finished_runs(config, recording.profile, out_dir / CHECKPOINT_DIR):
         scaled = authors_scale("ant", record["final_return"])
         run = {"cell_types": r.cell_types, "seed": r.seed, "genome": r.genome}
+        if r.cell_types is not None:
+            run["layers"] = final_spreads(out_dir / CHECKPOINT_DIR / record["checkpoint"])
         runs.append({**run, "authors_scale": scaled, **record})
     results = {
         "env": "ant",
@@ -109,6 +114,47 @@ def write_regime(recording: Recording, out_dir: Path) -> Path:
         "summary": summarise_regime(runs),
     }
     return recording.write(results, sorted({r["seed"] for r in runs}), parts=runs)
+
+
+def final_spreads(checkpoint: Path) -> list[dict]:
+    """Per SGB layer of the trained actor in ``checkpoint``: its mean sigma and mean |mu|
+    over the layer's table entries (a bias layer's too), the spread an individual's
+    weights have about their mean against the size of the means."""
+    _, params, _, _ = checkpoints.load(checkpoint)
+    return [
+        {
+            "layer": path,
+            "mean_sigma": float(np.mean(sigma(g))),
+            "mean_abs_mu": float(np.mean(np.abs(g.mu))),
+        }
+        for path, g in of_params(params.actor).items()
+    ]
+
+
+def spreads(payload: "Regime") -> dict[str, str]:
+    """Chapter 5's account of how far the regime's individuals can differ: the spread at
+    birth, softplus(rho) at the config's rho start (``regime_birth_sigma``), and over the
+    finished SGB runs' layers the trained mean sigma, mean |mu| and their ratio
+    (``regime_spreads``)."""
+    config = RUNS[payload.provenance.profile]
+    first_sgb = next(r for r in config.runs if r.cell_types is not None)
+    network = run_config(config, first_sgb).network
+    at_birth = float(softplus(network.rho_init))
+    birth = f"{at_birth:.2g} (rho {network.rho_init:g} ± {network.rho_init_std:g})"
+    layers = [layer for r in payload.results.runs for layer in (r.layers or [])]
+    if not layers:
+        return {"regime_birth_sigma": birth, "regime_spreads": NOT_RUN}
+    spread = [x.mean_sigma for x in layers]
+    mu = [x.mean_abs_mu for x in layers]
+    ratio = [100 * x.mean_sigma / x.mean_abs_mu for x in layers]
+    runs = sum(1 for r in payload.results.runs if r.layers)
+    return {
+        "regime_birth_sigma": birth,
+        "regime_spreads": f"mean sigma {min(spread):.2g} to {max(spread):.2g} per layer against "
+        f"a mean |mu| of {min(mu):.2g} to {max(mu):.2g}, so an individual's weights lie "
+        f"{min(ratio):.1f} to {max(ratio):.1f} % of their size from the means ({runs} runs, "
+        f"{len(layers)} layers)",
+    }
 
 
 def summarise_regime(runs: list[dict]) -> list[dict]:
@@ -208,8 +254,9 @@ def evidence(records: Records) -> list[Row]:
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
-    """What chapter 5 glues of the regime's runs (``regime``)."""
-    return regime(records("regime"))
+    """What chapter 5 glues of the regime's runs (``regime``, ``spreads``)."""
+    payload = records("regime")
+    return regime(payload) | spreads(payload)
 
 
 REGIME_COLUMNS = {
@@ -231,8 +278,15 @@ def regime_table(payload: "Regime") -> pd.DataFrame:
     return runs.rename(columns=REGIME_COLUMNS)
 
 
+class LayerSpread(Record):
+    layer: str
+    mean_sigma: NonNegative
+    mean_abs_mu: NonNegative
+
+
 class RegimeRun(Training):
     genome: str
+    layers: MaybeEmpty[LayerSpread] | None = None  # an SGB run's, once written with them
     authors_scale: Finite
     train_steps_per_s: Positive
     wall_time_s: Seconds
