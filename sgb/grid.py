@@ -228,10 +228,23 @@ def describe(queue: Queue) -> list[str]:
 # --- landing ----------------------------------------------------------------------------
 
 
+def _as_committed(file: Path) -> bytes | None:
+    """The bytes of ``file`` at the HEAD of the git checkout it lies in (None where it is
+    not committed there, or lies in no checkout)."""
+    shown = subprocess.run(
+        ["git", "show", f"HEAD:./{file.name}"], cwd=file.parent, capture_output=True
+    )
+    return shown.stdout if shown.returncode == 0 else None
+
+
 def _copy(source: Path, target: Path) -> bool:
-    """Copy ``source`` over ``target`` atomically unless they hold the same bytes."""
+    """Copy ``source`` over ``target`` atomically unless they hold the same bytes, or
+    ``source`` is as its own checkout committed it: only what the workers wrote lands,
+    never a stale copy over what this checkout has committed since."""
     data = source.read_bytes()
     if target.exists() and target.read_bytes() == data:
+        return False
+    if data == _as_committed(source):
         return False
     atomic_write(target, data)
     shutil.copystat(source, target)

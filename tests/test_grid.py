@@ -120,3 +120,22 @@ def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, m
     assert again.results == [repository / "rl" / "regime_ant_smoke.json"]
     listing = grid.describe(next(grid.queues(repository, SMOKE))[2])
     assert [line.split(": ")[1].split(" (")[0] for line in listing[:2]] == ["done", "done"]
+
+
+def test_landing_skips_a_file_the_workers_left_as_their_checkout_committed_it(tmp_path):
+    """A worktree's results file still as its HEAD has it (the workers never wrote it) does
+    not land over this checkout's newer one; once the workers write it, it lands."""
+    tree = tmp_path / "worktree"
+    (tree / "results").mkdir(parents=True)
+    stale = tree / "results" / "sweep.json"
+    stale.write_text('{"old": 1}\n')
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-C", str(tree)]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "."], check=True)
+    subprocess.run([*git, "commit", "-qm", "results"], check=True)
+    here = tmp_path / "repository" / "sweep.json"
+    here.parent.mkdir()
+    here.write_text('{"newer": 2}\n')
+    assert not grid._copy(stale, here) and here.read_text() == '{"newer": 2}\n'
+    stale.write_text('{"written by a worker": 3}\n')
+    assert grid._copy(stale, here) and here.read_text() == stale.read_text()
