@@ -219,7 +219,7 @@ CLAIMS: dict[str, Claim] = {
             "fig2.kl_explains_low",
             "Figure 2",
             "the KL term accounts for the DGB's lead at low compression",
-            "(Section 2.1's explanation, no number)",
+            "(Section 2.2's explanation, no number)",
             "SGB with a weaker KL - the authors' SGB at about 10x (points)",
             None,
             "",

@@ -336,3 +336,18 @@ def test_the_high_end_adds_its_cells_to_the_sweeps_and_counts_a_cell_both_hold_o
     np.testing.assert_allclose(curve[395.0], [0.6, 0.6])
     assert curve[606.0].size == 3
     assert sgb_full_runs.pooled(results, None) is results
+
+
+def test_the_high_end_text_reads_each_width_of_the_dgb_high_file():
+    """The text of Figure 2's high end names each width of ``dgb_high``'s file with its
+    nominal ratio and its finished seeds' mean accuracy, as the file's table has them."""
+    payload = RECORDS("dgb_high")
+    table = dgb_full_runs.dgb_full_table(payload)
+    text = sgb_full_runs.high_end(payload, {})["high_dgb"]
+    rounds = payload.provenance.config.dgb.rounds
+    for width, cells in table.groupby("g-net width"):
+        done = cells[cells["rounds"] == rounds]
+        nominal = cells["nominal ratio (paper's axis)"].iloc[0]
+        assert f"width {width}: nominally {nominal:,.0f}x" in text
+        assert f"{done['test accuracy %'].mean():.1f}" in text
+        assert f"over {len(done)} seeds" in text

@@ -377,7 +377,7 @@ def supervised_population_rows(sgb_full: "SgbFullResults", dataset: str) -> list
 
 
 def kl_share_row(sgb_full: "SgbFullResults", dgb_budget: Record, dataset: str) -> Row | None:
-    """Section 2.1's explanation of the DGB's lead at low compression, the KL term, at the
+    """Section 2.2's explanation of the DGB's lead at low compression, the KL term, at the
     authors' budgets: the SGB with its KL counted once per type pair (a weaker KL, so smaller
     spreads) minus the authors' SGB (per synapse) at the lowest ratio, Welch's t over seeds
     in points, against the DGB's whole lead there (``sgb.experiments.dgb_budget``: one seed,
@@ -538,7 +538,7 @@ def supervised_population(card: Card) -> dict[str, str]:
 
 
 def kl_share(card: Card) -> dict[str, str]:
-    """Section 2.1's KL explanation at about 10x (``kl_share_row``): the row's texts
+    """Section 2.2's KL explanation at about 10x (``kl_share_row``): the row's texts
     (``kl_share_*``) and the DGB's lead it is weighed against (``kl_share_lead``)."""
     row = row_of(card, "fig2.kl_explains_low")
     lead = NOT_RUN if row is None else f"{row.paper_effect:.1f} points"
@@ -608,11 +608,42 @@ def declines(card: Card) -> dict[str, str]:
     )
 
 
+def high_end(dgb_high: ResultsFile | None, card: Card) -> dict[str, str]:
+    """Figure 2's high end as the paper's axis counts it (``dgb_high``'s cells): per target
+    ratio the DGB's g-net width, its compression under the paper's nominal count, ours and
+    the authors', and its test accuracy, mean ± SEM over its finished seeds (``high_dgb``);
+    and the scorecard row of the authors' SGB against it at the cells nearest the paper's
+    nominal 1,500x (``high1500_*``, ``row_texts``)."""
+    if dgb_high is None:
+        return {"high_dgb": NOT_RUN} | row_texts("high1500", None)
+    config = dgb_high.provenance.config
+    finished = figure2_records(dgb_high.results, config.dgb.rounds)
+    parts = []
+    for ratio in config.ratios:
+        mine = [c for c in dgb_high.results.cells.values() if c.ratio == ratio]
+        done = [100 * r.accuracy for r in finished if r.setting == ratio]
+        if not mine or not done:
+            continue
+        cell = mine[0]
+        spread = f" ± {stats.sem(np.array(done)):.1f}" if len(done) > 1 else ""
+        parts.append(
+            f"width {cell.gnet_width}: nominally {cell.nominal_ratio:,.0f}x, "
+            f"{cell.compression_ours:.0f}x ours, {cell.compression_authors:.0f}x the authors', "
+            f"{np.mean(done):.1f}{spread} % over {len(done)} seeds"
+        )
+    cells = dgb_high.results.cells.values()
+    target = min(cells, key=lambda c: abs(np.log(c.nominal_ratio / 1500))).ratio
+    authors = SGB_VARIANTS["authors"]
+    row = row_of(card, "fig2.full.sgb_better_high", f"(target {target:g}x), the SGB ({authors})")
+    return {"high_dgb": "; ".join(parts) or NOT_RUN} | row_texts("high1500", row)
+
+
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 4 glues of Figure 2 at the authors' budgets."""
     return (
         sgb_full(records("sgb_full"))
         | figure2_full(records("dgb_full"), card)
+        | high_end(records.get("dgb_high"), card)
         | supervised_population(card)
         | kl_share(card)
         | declines(card)
