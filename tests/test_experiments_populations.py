@@ -183,6 +183,19 @@ def test_a_smoke_run_resumes_without_evaluating_again(tmp_path, monkeypatch, cap
     again = read_results(path)["results"]["genomes"]["ant_k64_s1"]["parts"]["long_legs"]
     assert again["returns"] == lost["returns"]  # the same individuals and initial states
 
+    # a genome whose checkpoint changed since its parts were evaluated (a retrained run
+    # under the same name) is evaluated again, every part of it, and only it
+    payload = read_results(path)
+    genomes = payload["results"]["genomes"]
+    kept = genomes["ant_k64_s0"]["checkpoint_sha256"]
+    assert len(kept) == 64 and genomes["ant_k64_s1"]["checkpoint_sha256"]
+    genomes["ant_k64_s0"]["checkpoint_sha256"] = "0" * 64
+    path.write_text(json.dumps(payload))
+    calls.clear()
+    populations.run("smoke", tmp_path)
+    assert len(calls) == len(populations.PARTS)
+    assert read_results(path)["results"]["genomes"]["ant_k64_s0"]["checkpoint_sha256"] == kept
+
 
 def test_the_authors_one_sample_t_leaves_out_the_mean_networks_error_and_welch_counts_it():
     rng = np.random.default_rng(3)

@@ -49,6 +49,7 @@ show a spread far larger than the per-genome errors, not rule out one of their s
 its interval (t = 4.30) is what a claim about the setting's genomes in general must use.
 """
 
+import json
 import math
 import time
 from dataclasses import dataclass, replace
@@ -433,6 +434,14 @@ def evaluate(recording: Recording, out_dir: Path) -> Path:
     env, config, path = "ant", recording.config, recording.path
     name = path.stem.removesuffix(f"_{env}_{recording.profile}")  # the experiment
     results = recording.earlier() or {"env": env, "genomes": {}}
+    digests = {}
+    for genome in config.genomes:
+        label, checkpoint = genome_label(genome, env), checkpoint_path(genome, config, env)
+        digests[label] = checkpoint_digest(checkpoint_root(out_dir, checkpoint) / checkpoint)
+        kept = results["genomes"].get(label, {}).get("checkpoint_sha256")
+        if kept is not None and kept != digests[label]:
+            print(f"{label}: its checkpoint changed since it was evaluated; evaluated again")
+            del results["genomes"][label]
     plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in config.parts]
     steps = config.n_individuals * config.episodes * config.episode_length
     todo = [item for item in plan if not _has(results, item[1], item[2], env)]
@@ -449,6 +458,7 @@ def evaluate(recording: Recording, out_dir: Path) -> Path:
         returns = evaluate_part(agents[label], part, config, config.seed + j)
         wall = time.perf_counter() - tic
         record = results["genomes"].setdefault(label, _new_record(genome, j, config, env))
+        record["checkpoint_sha256"] = digests[label]
         record["parts"][part] = {
             "returns": returns,
             "wall_time_s": round(wall, 2),
@@ -469,6 +479,12 @@ def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> 
         "checkpoint": checkpoint_path(genome, config, env),
         "parts": {},
     }
+
+
+def checkpoint_digest(checkpoint: Path) -> str:
+    """The SHA-256 of ``checkpoint``'s parameters, as its sidecar records it: a genome's
+    parts are reused only while the checkpoint they were evaluated on is the same."""
+    return json.loads(checkpoint.with_suffix(".json").read_text())["sha256"]
 
 
 def _has(results: dict, genome: Genome, part: str, env: str) -> bool:
