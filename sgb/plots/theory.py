@@ -325,6 +325,8 @@ def saddle(results: Record, axes=None) -> np.ndarray:
                 i + 0.2, mean, yerr=[[mean - low], [high - mean]], fmt="s", color=color
             )
     axes[0].axhline(0, color="k", lw=0.5)
+    low, high = axes[0].get_ylim()
+    axes[0].set_ylim(low, high + 0.7 * (high - low))  # room above the bars for the legend
     axes[0].set(
         xscale="log",
         xlabel="|eigenvalue| of H at the means (nats per weight$^2$)",
