@@ -49,8 +49,16 @@ GRID_ENV = "SGB_GRID"
 LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
 # The long runs, in the order they train: (experiment, profile). Figure 3C's regime runs
 # first; the other issues' long runs follow it (Figure 2's high end, then the width sweep).
-# The high end's DGB cells, two hours of one core, went first once and stay there.
-QUEUE = (("dgb_high", "cpu"), ("regime", "cpu"), ("sgb_high", "cpu"), ("width", "cpu"))
+# The high end's DGB cells, two hours of one core, went first once and stay there. The
+# populations of the regime's genomes go before its runs: each evaluates a genome that has
+# landed (20-40 min of one core against 2.5 h a run), so a genome is measured as it lands.
+QUEUE = (
+    ("dgb_high", "cpu"),
+    ("regime_populations", "cpu"),
+    ("regime", "cpu"),
+    ("sgb_high", "cpu"),
+    ("width", "cpu"),
+)
 
 
 def worktree() -> Path:

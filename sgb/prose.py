@@ -44,6 +44,14 @@ GENOMES = (("our genome", "ours"), ("the authors' genome", "authors"))
 
 # Chapter 5 --------------------------------------------------------------------------------
 
+REGIME_STEPS = "5 x 10^7 steps"  # the budget a regime population row names
+
+
+def regime_setting(row: Row) -> str:
+    """A regime population row's setting after its budget: e.g. ``128 types, seed 0,
+    sampled actions``."""
+    return row.setting.split(f"{REGIME_STEPS}, ", 1)[-1]
+
 
 def backends(bench: BenchBackends) -> dict[str, str]:
     """``mjx_vs_spring`` (MJX's training env-steps/s over spring's), ``fastest_backend`` and

@@ -213,17 +213,31 @@ def test_the_authors_one_sample_t_leaves_out_the_mean_networks_error_and_welch_c
     assert welch["t"] == pytest.approx(welch["estimate"] / se)
 
 
-def test_a_regime_genome_is_read_from_the_regime_checkpoints_and_adds_the_authors_parts():
+def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains():
     config = populations.REGIME_PROFILES["cpu"]
-    (genome,) = config.genomes
-    assert populations.checkpoint_path(genome, config) == (
+    labels = [populations.genome_label(g) for g in config.genomes]
+    assert labels[:2] == ["ant_regime_k128_s0", "ant_regime_k16_s0"] and len(labels) == 12
+    assert (config.n_individuals, config.episodes) == (100, 64)
+    by_label = dict(zip(labels, config.genomes, strict=True))
+    k64, k128 = by_label["ant_regime_k64_s0"], by_label["ant_regime_k128_s0"]
+    assert k64.parts == (*populations.PARTS, *populations.AUTHORS_PARTS)
+    assert k128.parts == populations.AUTHORS_PARTS  # our protocol for the 64 types only
+    assert populations.checkpoint_path(k64, config) == (
         "rl/checkpoints/ant_regime_k64_s0_cpu.msgpack"
     )
-    assert populations.genome_label(genome) == "ant_regime_k64_s0"
-    assert config.parts == (*populations.PARTS, *populations.AUTHORS_PARTS)
-    assert (config.n_individuals, config.episodes) == (100, 64)
+    # the committed 64-type seed-0 checkpoint was trained before the regime's fixes: it
+    # waits for the run that replaces it, while the 128 types' finished run is evaluated
+    results = committed_results()
+    assert (results / populations.checkpoint_path(k64, config)).exists()
+    assert not populations.landed(k64, config, results)
+    assert populations.landed(k128, config, results)
+    queued = populations.queued("cpu", results)
+    assert [r.chunks for r in queued.runs[:2]] == [3, 3]
+    assert "(its training has not landed)" in queued.runs[labels.index("ant_regime_k64_s0")].label
     with pytest.raises(ValueError, match="authors' settings"):
         populations.Genome("ours", 0, regime=True)
+    with pytest.raises(ValueError, match="protocol"):
+        populations.Genome("authors", 0, protocols=("theirs",))
 
 
 def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
@@ -240,7 +254,7 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
             long_legs = 1500 + skill + rng.normal(0, 500, (100, 32))
             mean_net = normal - 100 + rng.normal(0, 100, (100, 32))
             parts = {"normal": normal, "long_legs": long_legs, "mean_network": mean_net}
-            genomes[f"{settings}{seed}"] = {
+            genomes[populations.genome_label(populations.Genome(settings, seed))] = {
                 "settings": settings,
                 "training_seed": seed,
                 "parts": {k: {"returns": v.tolist()} for k, v in parts.items()},
@@ -258,32 +272,54 @@ def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
 
 
 def test_regime_population_rows_tell_the_two_protocols_apart():
-    """One synthetic genome read back through JSON: its individuals beat the mean network
-    by 5 % on the same states, and under sampled actions by 2 % with a mean network so
-    noisy that only the one-sample t (which takes its mean as exact) calls it."""
+    """Two synthetic 64-type genomes read back through JSON, the first under both
+    protocols: its individuals beat the mean network by 5 % on the same states, and under
+    sampled actions by 2 % with a mean network so noisy that only the one-sample t (which
+    takes its mean as exact) calls it; individuals 15 % of the return apart differ by more
+    than 1 %, each genome and both pooled with the genome as the unit."""
     from sgb.experiments import populations
 
     rng = np.random.default_rng(11)
-    skill = rng.normal(0, 300, (100, 1))
-    normal = 2000 + skill + rng.normal(0, 300, (100, 64))
-    parts = {
-        "normal": normal,
-        "long_legs": 1500 + skill + rng.normal(0, 300, (100, 64)),
-        "mean_network": normal - 100 + rng.normal(0, 50, (100, 64)),
-        "sampled": 2040 + skill + rng.normal(0, 300, (100, 64)),
-        "mean_network_sampled": rng.normal(2000, 2000, (16, 1)),
-    }
-    genome = {"training_seed": 0, "parts": {k: {"returns": v.tolist()} for k, v in parts.items()}}
-    genome["summary"] = populations.genome_summary(parts)
-    stored = json.loads(json.dumps(jsonable({"genomes": {"regime": genome}})))
+    genomes = {}
+    for seed in (0, 1):
+        skill = rng.normal(0, 300, (100, 1))
+        normal = 2000 + skill + rng.normal(0, 300, (100, 64))
+        parts = {
+            "sampled": 2040 + skill + rng.normal(0, 300, (100, 64)),
+            "long_legs_sampled": 1500 + skill + rng.normal(0, 300, (100, 64)),
+            "mean_network_sampled": rng.normal(2000, 2000, (16, 1)),
+        }
+        if seed == 0:
+            parts |= {
+                "normal": normal,
+                "long_legs": 1500 + skill + rng.normal(0, 300, (100, 64)),
+                "mean_network": normal - 100 + rng.normal(0, 50, (100, 64)),
+            }
+        genomes[f"k64_s{seed}"] = {
+            "cell_types": 64,
+            "training_seed": seed,
+            "parts": {k: {"returns": v.tolist()} for k, v in parts.items()},
+            "summary": populations.genome_summary(parts),
+        }
+    stored = json.loads(json.dumps(jsonable({"genomes": genomes})))
     rows = population_runs.regime_population_rows(
         populations.RegimePopulationsResults.model_validate(stored)
     )
     fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
+    assert len(fig5) == 5  # paired, one-sample and Welch for seed 0; the last two for seed 1
     assert fig5[0].verdict in verdicts.IN_DIRECTION
     assert fig5[0].test.estimate == pytest.approx(5.0, abs=0.5)  # % of the mean network
-    one_sample, welch = fig5[1:]
+    one_sample, welch = fig5[1:3]
     assert one_sample.test.p < 0.05 < welch.test.p
     assert welch.verdict == verdicts.INCONCLUSIVE
-    (legs,) = [r for r in rows if r.key == "fig4e.r_legs"]
-    assert legs.verdict in verdicts.IN_DIRECTION and legs.test.low > 0.5
+    legs = [r for r in rows if r.key == "fig4e.r_legs"]
+    assert len(legs) == 3 and all(r.verdict in verdicts.IN_DIRECTION for r in legs)
+    assert all(r.test.low > 0.5 for r in legs)
+    variability = [r for r in rows if r.key == "title.variability.regime"]
+    assert [r.verdict for r in variability] == [verdicts.LARGER] * 4
+    pooled = variability[-1]
+    assert "2 genomes pooled" in pooled.setting and "sampled actions" in pooled.setting
+    each = [r.test.estimate for r in variability[:3] if "sampled" in r.setting]
+    assert pooled.test.estimate == pytest.approx(np.mean(each))
+    texts = population_runs.regime_populations(None)
+    assert set(texts.values()) == {population_runs.NOT_RUN}

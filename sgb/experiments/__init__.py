@@ -441,16 +441,18 @@ EXPERIMENTS: dict[str, Experiment] = {
         "run_regime",
         "REGIME_PROFILES",
         chapter=5,
-        figure="Fig. 4E and 5 on the 64-type genome of the authors' regime at 5e7 steps: "
-        "100 individuals x 64 episodes, our protocol (deterministic actions, the mean "
-        "network on the same states) and theirs (sampled actions, their one-sample t "
-        "beside Welch's)",
-        inputs="the Ant; the regime's checkpoint (at smoke, of `reproduce regime "
-        "--profile smoke` in the same results directory)",
+        figure="Fig. 4E and 5 and the title's claim on every SGB genome of the authors' regime "
+        "at 5e7 steps (128, 16, 64 and 32 types, seeds 0-2, as each lands): 100 individuals "
+        "x 64 episodes on both bodies with sampled actions (their protocol; their one-sample "
+        "t beside Welch's), and for the 64 types with deterministic actions too (ours)",
+        inputs="the Ant; the regime's checkpoints (at smoke, of `reproduce regime "
+        "--profile smoke` in the same results directory); a genome whose run has not landed "
+        "waits",
         costs={
-            "smoke": "5 parts of 4 x 3 episodes, not measured",
-            "cpu": "32M env-steps, about half an hour of one CPU core (not yet run); resumable",
-            "paper": "the cpu design on the paper's checkpoint; not measured",
+            "smoke": "6 parts of 4 x 3 episodes, not measured",
+            "cpu": "19.2M env-steps a genome (38.4M for the 64 types), about 20 min (40) of "
+            "one CPU core each; resumable",
+            "paper": "the cpu design on the paper's checkpoints; not measured",
         },
         results={"": "rl/regime_populations_ant_cpu.json"},
         evidence_name="regime_evidence",

@@ -17,7 +17,7 @@ import pandas as pd
 from sgb import stats, verdicts
 from sgb.claims import Row, episodes_to_decide, genomes_at, judge, legs_row, trained_steps
 from sgb.profiles import PROFILE_NAMES
-from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
+from sgb.prose import GENOMES, NOT_RUN, Card, regime_setting, row_of, row_texts
 from sgb.recording import start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
@@ -172,15 +172,13 @@ def figures4_5(card: Card) -> dict[str, str]:
 
 
 def variability(card: Card) -> dict[str, str]:
-    """The title's claim (``title.variability*`` rows): the genome of the authors' regime
-    (``variability_regime``: estimate, interval and verdict) and, per genome settings at
+    """The title's claim (``title.variability*`` rows): the genomes of the authors' regime
+    (``variability_regime``: each row's estimate, interval and verdict) and, per genome settings at
     the cpu sweep's budget, each genome's verdict (``variability_ours``,
     ``variability_authors``); ``NOT_RUN`` where a setting has no row."""
-    texts = {}
-    regime = row_of(card, "title.variability.regime")
-    found = row_texts("row", regime)
-    shown = f"{found['row_ours']} % of the return, {found['row_verdict']}"
-    texts["variability_regime"] = NOT_RUN if regime is None else shown
+    regime = card.get("title.variability.regime", [])
+    shown = "; ".join(f"{regime_setting(r)}: {r.ours} %, **{r.verdict}**" for r in regime)
+    texts = {"variability_regime": shown or NOT_RUN}
     for who, settings in GENOMES:
         rows = [r for r in card.get("title.variability", []) if f", {who}, " in r.setting]
         texts[f"variability_{settings}"] = (

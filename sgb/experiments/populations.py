@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 from scipy import stats as scipy_stats
 
-from sgb import claims, stats, validation
+from sgb import claims, runlock, stats, validation
 from sgb.claims import (
     Row,
     genomes_at,
@@ -70,15 +70,17 @@ from sgb.claims import (
     variability_row,
 )
 from sgb.profiles import PROFILE_NAMES, check_profile
-from sgb.prose import GENOMES, NOT_RUN, Card, row_of, row_texts
-from sgb.provenance import git_commit
+from sgb.prose import GENOMES, NOT_RUN, REGIME_STEPS, Card, regime_setting, row_of, row_texts
+from sgb.provenance import git_commit, read_results, results_file
+from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
+from sgb.rl import regime_runs
 from sgb.rl.population import population_returns
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
-from sgb.rl.runs import checkpoint_name, checkpoint_root
+from sgb.rl.runs import checkpoint_name, checkpoint_root, finished_run
 from sgb.schemas import (
     Correlation,
     Count,
@@ -99,9 +101,11 @@ from sgb.schemas import (
 
 BODIES = ("normal", "long_legs")
 PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body
-# the authors' Figure 5 protocol, on the normal body with sampled actions: other
-# individuals, and the mean network on episodes of its own
-AUTHORS_PARTS = ("sampled", "mean_network_sampled")
+# the authors' protocol, with sampled actions: other individuals on both bodies, and the
+# mean network on the normal body on episodes of its own
+SAMPLED_BODIES = ("sampled", "long_legs_sampled")
+AUTHORS_PARTS = (*SAMPLED_BODIES, "mean_network_sampled")
+PROTOCOLS = {"ours": PARTS, "authors": AUTHORS_PARTS}  # protocol -> the parts it plays
 TARGET_RELIABILITY = 0.8
 DECIMALS = 3  # returns are kept to 0.001
 
@@ -116,12 +120,22 @@ class Genome:
     seed: int
     cell_types: int = 64
     regime: bool = False
+    protocols: tuple[str, ...] = ("ours",)  # of PROTOCOLS, the ones it is evaluated under
 
     def __post_init__(self) -> None:
         validation.choice("settings", self.settings, SETTINGS)
         validation.integer("seed", self.seed, minimum=0)
         if self.regime and self.settings != "authors":
             raise ValueError("a regime genome has the authors' settings")
+        if not self.protocols:
+            raise ValueError("a genome is evaluated under at least one protocol")
+        for protocol in self.protocols:
+            validation.choice("protocol", protocol, tuple(PROTOCOLS))
+
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """The parts its protocols play, in the order they are evaluated."""
+        return tuple(part for protocol in self.protocols for part in PROTOCOLS[protocol])
 
     def checkpoint(self, profile: str, env: str = "ant") -> str:
         """The file name of its checkpoint, trained at ``profile``."""
@@ -142,7 +156,6 @@ class PopulationsConfig:
     episode_length: int = 1000
     seed: int = 0
     source: str = "cpu"
-    authors_protocol: bool = False  # also evaluate AUTHORS_PARTS
 
     def __post_init__(self) -> None:
         validation.instance("genomes", self.genomes, tuple)
@@ -151,10 +164,6 @@ class PopulationsConfig:
         validation.integer("episode_length", self.episode_length)
         validation.integer("seed", self.seed, minimum=0)
         validation.choice("source", self.source, PROFILE_NAMES)
-
-    @property
-    def parts(self) -> tuple[str, ...]:
-        return PARTS + AUTHORS_PARTS if self.authors_protocol else PARTS
 
 
 def genome_label(genome: Genome, env: str = "ant") -> str:
@@ -188,16 +197,29 @@ PROFILES = {p: populations_config(p) for p in PROFILE_NAMES}
 
 
 def regime_populations_config(profile: str) -> PopulationsConfig:
-    """Figures 4E and 5 on the 64-type genome trained under the authors' regime at the
-    paper's budget (seed 0), under our protocol and theirs: 100 individuals x 64 episodes
-    of 1000 steps at ``cpu`` and ``paper``; at ``smoke`` the regime's 16-type smoke genome
-    (``reproduce regime --profile smoke`` makes it), 4 individuals x 3 episodes of 50."""
+    """Figures 4E and 5 on every SGB genome of the authors' regime at the paper's budget
+    (``sgb.rl.regime_runs.grid``: 128 and 16 types at seeds 0-2, in the order they train,
+    then 64 types at seeds 0-2) under the authors' protocol, and under ours too for the 64
+    types: 100 individuals x 64 episodes of 1000 steps at ``cpu`` and ``paper``; at
+    ``smoke`` the regime's 16-type smoke genome (``reproduce regime --profile smoke`` makes
+    it), 4 individuals x 3 episodes of 50."""
     check_profile(profile)
-    if profile == "smoke":
-        genomes = (Genome("authors", 0, 16, regime=True),)  # the smoke profile trains 16 types
-        return PopulationsConfig(genomes, 4, 3, 50, source="smoke", authors_protocol=True)
-    genomes = (Genome("authors", 0, 64, regime=True),)
-    return PopulationsConfig(genomes, 100, 64, 1000, source=profile, authors_protocol=True)
+    both = tuple(PROTOCOLS)
+    if profile == "smoke":  # the smoke profile trains 16 types
+        genomes = (Genome("authors", 0, 16, regime=True, protocols=both),)
+        return PopulationsConfig(genomes, 4, 3, 50, source="smoke")
+    grid = [r for r in regime_runs.grid() if r.cell_types and r.genome == "authors"]
+    genomes = tuple(
+        Genome(
+            "authors",
+            r.seed,
+            r.cell_types,
+            regime=True,
+            protocols=both if r.cell_types == 64 else ("authors",),
+        )
+        for r in grid
+    )
+    return PopulationsConfig(genomes, 100, 64, 1000, source=profile)
 
 
 REGIME_PROFILES = {p: regime_populations_config(p) for p in PROFILE_NAMES}
@@ -315,16 +337,26 @@ def authors_comparison(individuals: np.ndarray, mean_network: np.ndarray) -> dic
 
 
 def genome_summary(returns: dict) -> dict:
-    """Everything above for one genome's returns ``{part: (N, E)}`` (the authors' Figure 5
-    protocol too where ``returns`` holds its parts)."""
+    """Everything above for one genome's returns ``{part: (N, E)}``: under our protocol
+    where ``returns`` holds its parts (``PARTS``), and under the authors' where it holds
+    theirs (``authors_protocol``: their Figure 5 comparison, each sampled body's variance
+    split and the r between the bodies)."""
     arrays = {part: np.asarray(v, dtype=np.float64) for part, v in returns.items()}
-    out = {
-        **{body: body_summary(arrays[body]) for body in BODIES},
-        "legs": legs_correlation(arrays["normal"], arrays["long_legs"]),
-        "mean_network": mean_network_difference(arrays["normal"], arrays["mean_network"]),
-    }
+    out = {}
+    if set(PARTS) <= set(arrays):
+        out |= {
+            **{body: body_summary(arrays[body]) for body in BODIES},
+            "legs": legs_correlation(arrays["normal"], arrays["long_legs"]),
+            "mean_network": mean_network_difference(arrays["normal"], arrays["mean_network"]),
+        }
     if set(AUTHORS_PARTS) <= set(arrays):
-        out["authors_protocol"] = authors_comparison(*(arrays[p] for p in AUTHORS_PARTS))
+        normal, long_legs, mean_network = (arrays[p] for p in AUTHORS_PARTS)
+        out["authors_protocol"] = {
+            **authors_comparison(normal, mean_network),
+            "normal": body_summary(normal),
+            "long_legs": body_summary(long_legs),
+            "legs": legs_correlation(normal, long_legs),
+        }
     return out
 
 
@@ -374,13 +406,13 @@ SAMPLED_SEED_OFFSET = 1000  # the authors' protocol draws its individuals and st
 
 def evaluate_part(agent: tuple, part: str, config: PopulationsConfig, seed: int) -> np.ndarray:
     """Returns (N, E) of one part: the individuals on a body, or the mean network on the
-    normal body (on the individuals' initial states, row by row); ``sampled`` and
-    ``mean_network_sampled``, the same with sampled actions, from evaluation seed
-    ``seed + SAMPLED_SEED_OFFSET`` (other individuals, other states). ``agent``: (PPO
-    settings, actor parameters, normalizer)."""
+    normal body (on the individuals' initial states, row by row); the ``AUTHORS_PARTS``,
+    the same with sampled actions, from evaluation seed ``seed + SAMPLED_SEED_OFFSET``
+    (other individuals, other states; the same individuals on both bodies). ``agent``:
+    (PPO settings, actor parameters, normalizer)."""
     ppo, actor, normalizer = agent
     sampled = part in AUTHORS_PARTS
-    body = part if part in BODIES else "normal"
+    body = "long_legs" if part.startswith("long_legs") else "normal"
     returns = population_returns(
         replace(ppo.env, variant=body),
         ppo.network,
@@ -398,15 +430,21 @@ def evaluate_part(agent: tuple, part: str, config: PopulationsConfig, seed: int)
 
 def summarise(results: dict, config: PopulationsConfig) -> dict:
     """``results`` with every finished genome's summary, the pooled summaries of every
-    setting, and whether the design is complete."""
+    setting (our protocol), and whether the design is complete."""
     genomes = results["genomes"]
-    done = [g for g in genomes.values() if set(config.parts) <= set(g["parts"])]
-    for record in done:
-        record["summary"] = genome_summary({p: record["parts"][p]["returns"] for p in config.parts})
+    done = {
+        genome_label(g): g
+        for g in config.genomes
+        if set(g.parts) <= set(genomes.get(genome_label(g), {}).get("parts", {}))
+    }
+    for label, genome in done.items():
+        parts = genomes[label]["parts"]
+        genomes[label]["summary"] = genome_summary({p: parts[p]["returns"] for p in genome.parts})
+    ours = [genomes[label] for label, g in done.items() if "ours" in g.protocols]
     results["pooled"] = {
-        settings: pool_setting([g["summary"] for g in done if g["settings"] == settings])
+        settings: pool_setting([g["summary"] for g in ours if g["settings"] == settings])
         for settings in SETTINGS
-        if any(g["settings"] == settings for g in done)
+        if any(g["settings"] == settings for g in ours)
     }
     results["complete"] = len(done) == len(config.genomes)
     return results
@@ -427,24 +465,58 @@ def run_regime(profile: str, out_dir: Path) -> Path:
     return evaluate(start(REGIME_PROFILES, profile, rl_dir, "regime_populations_ant"), out_dir)
 
 
+def landed(genome: Genome, config: PopulationsConfig, out_dir: Path, env: str = "ant") -> bool:
+    """Whether ``genome``'s checkpoint (under ``out_dir``, else the committed one) holds its
+    finished training: for a regime genome, a run of the regime as it now trains
+    (``sgb.rl.regime_runs.run_config``), not an earlier one under its name."""
+    checkpoint = checkpoint_path(genome, config, env)
+    path = checkpoint_root(out_dir, checkpoint) / checkpoint
+    if not genome.regime:
+        return path.exists()
+    runs = regime_runs.RUNS[config.source]
+    run = regime_runs.RegimeRun(genome.cell_types, genome.seed)
+    return finished_run(path, regime_runs.run_config(runs, run)) is not None
+
+
+def genome_lock(results: Path, genome: Genome, env: str = "ant") -> Path:
+    """The path the lock of ``genome``'s evaluation into the results file ``results`` is
+    taken on (held while its parts are evaluated)."""
+    return results.with_name(f"{results.stem}_{genome_label(genome, env)}")
+
+
 def evaluate(recording: Recording, out_dir: Path) -> Path:
     """Evaluate every part of ``recording.config`` that its results file does not hold yet
     (checkpoints under ``out_dir``, else the committed ones), writing the file after each
-    part; returns its path."""
+    part; a genome whose training has not landed (``landed``) waits for a later run. One
+    process at a time evaluates into a file (another one returns at once); returns its
+    path."""
+    path = recording.path
+    with runlock.claim(path.with_suffix("")) as mine:
+        if not mine:
+            print(f"another process is evaluating into {path}; it is left to it", flush=True)
+            return path
+        return _evaluate(recording, out_dir)
+
+
+def _evaluate(recording: Recording, out_dir: Path) -> Path:
     env, config, path = "ant", recording.config, recording.path
     name = path.stem.removesuffix(f"_{env}_{recording.profile}")  # the experiment
     results = recording.earlier() or {"env": env, "genomes": {}}
-    digests = {}
+    ready = [g for g in config.genomes if landed(g, config, out_dir, env)]
     for genome in config.genomes:
+        if genome not in ready:
+            print(f"{name} {genome_label(genome, env)}: its training has not landed; it waits")
+    digests = {}
+    for genome in ready:
         label, checkpoint = genome_label(genome, env), checkpoint_path(genome, config, env)
         digests[label] = checkpoint_digest(checkpoint_root(out_dir, checkpoint) / checkpoint)
         kept = results["genomes"].get(label, {}).get("checkpoint_sha256")
         if kept is not None and kept != digests[label]:
             print(f"{label}: its checkpoint changed since it was evaluated; evaluated again")
             del results["genomes"][label]
-    plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in config.parts]
+    plan = [(j, g, part) for j, g in enumerate(config.genomes) for part in g.parts]
     steps = config.n_individuals * config.episodes * config.episode_length
-    todo = [item for item in plan if not _has(results, item[1], item[2], env)]
+    todo = [item for item in plan if item[1] in ready and not _has(results, *item[1:], env)]
     agents: dict[str, tuple] = {}
     for k, (j, genome, part) in enumerate(todo):
         label = genome_label(genome, env)
@@ -454,9 +526,10 @@ def evaluate(recording: Recording, out_dir: Path) -> Path:
         checkpoint = checkpoint_path(genome, config, env)
         if label not in agents:
             agents = {label: load_agent(checkpoint_root(out_dir, checkpoint) / checkpoint)}
-        tic = time.perf_counter()
-        returns = evaluate_part(agents[label], part, config, config.seed + j)
-        wall = time.perf_counter() - tic
+        with runlock.exclusive(genome_lock(path, genome, env)):
+            tic = time.perf_counter()
+            returns = evaluate_part(agents[label], part, config, config.seed + j)
+            wall = time.perf_counter() - tic
         record = results["genomes"].setdefault(label, _new_record(genome, j, config, env))
         record["checkpoint_sha256"] = digests[label]
         record["parts"][part] = {
@@ -467,13 +540,45 @@ def evaluate(recording: Recording, out_dir: Path) -> Path:
         }
         _write(recording, summarise(results, config))
     if not todo:
-        print(f"{name}: every part is in {path}; nothing evaluated", flush=True)
+        print(f"{name}: every landed genome's parts are in {path}; nothing evaluated", flush=True)
     return _write(recording, summarise(results, config))
+
+
+def queued(profile: str, results_dir: Path) -> Queue:
+    """The regime's genomes at ``profile`` under ``results_dir`` (``REGIME_PROFILES``), in
+    the order they are evaluated, each one chunk a part, for the background queue
+    (``sgb.grid``); a genome whose training has not landed is labelled so."""
+    config = REGIME_PROFILES[check_profile(profile)]
+    path = results_file(Path(results_dir) / "rl", "regime_populations_ant", profile)
+    genomes = read_results(path)["results"]["genomes"] if path.exists() else {}
+    runs = []
+    for genome in config.genomes:
+        label = genome_label(genome)
+        parts = genomes.get(label, {}).get("parts", {})
+        done = [parts[p] for p in genome.parts if p in parts]
+        waits = (
+            "" if landed(genome, config, Path(results_dir)) else " (its training has not landed)"
+        )
+        lock = genome_lock(path, genome)
+        runs.append(
+            QueuedRun(
+                label=f"{genome.cell_types} types seed {genome.seed}{waits}",
+                checkpoint=lock,
+                state=lock.with_suffix(".state.npz"),  # none: its parts are in the file
+                chunks=len(genome.parts),
+                finished=len(done) == len(genome.parts),
+                wall_time_s=sum(p["wall_time_s"] for p in done) if done else None,
+                chunks_done=len(done),
+                spent_s=sum(p["wall_time_s"] for p in done),
+            )
+        )
+    return Queue(path, tuple(runs))
 
 
 def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> dict:
     return {
         "settings": genome.settings,
+        "cell_types": genome.cell_types,
         "training_seed": genome.seed,
         "evaluation_seed": config.seed + j,
         "checkpoint": checkpoint_path(genome, config, env),
@@ -559,50 +664,91 @@ def populations_rows(results: "PopulationsResults") -> list[Row]:
 
 
 def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
-    """Figures 4E and 5 on the genome of the authors' training regime at the paper's budget
-    (``reproduce regime_populations``; one genome): Figure 5 under our protocol
-    (deterministic actions, the mean network on the same initial states, paired) and under
-    theirs (sampled actions), by their one-sample t and by Welch's t, both in % of the mean
-    network's return; Figure 4E's r against the paper's as these reliabilities see it."""
-    rows = []
+    """Figures 4E and 5 and the title's claim on each genome of the authors' training regime
+    at the paper's budget (``reproduce regime_populations``), under each protocol it was
+    evaluated with: ours (deterministic actions; Figure 5 paired with the mean network on
+    the same initial states) and theirs (sampled actions; Figure 5 by their one-sample t
+    and by Welch's t), Figure 5 in % of the mean network's return, Figure 4E's r against
+    the paper's as these reliabilities see it; then ``pooled_variability_rows``."""
+    rows, variability = [], {}
     for genome in results.genomes.values():
         summary = genome.summary
         if summary is None:
             continue
-        n, episodes = np.shape(genome.parts.normal.returns)
-        steps = "5 x 10^7 steps"
-        label = f"ant, the authors' regime, {steps}, 64 types, seed {genome.training_seed}"
+        n, episodes = np.shape(genome.parts.sampled.returns)
+        label = (
+            f"ant, the authors' regime, {REGIME_STEPS}, {genome.cell_types} types, "
+            f"seed {genome.training_seed}"
+        )
         budget = f"1 genome x {n} individuals x {episodes} episodes"
-        ours = summary.mean_network
-        percent = 100 / ours.mean_network_return
-        tests = [("our protocol (paired, same states)", stored_test(ours.test, percent))]
-        if summary.authors_protocol is not None:
-            theirs = summary.authors_protocol
-            base = 100 / theirs.mean_network_mean
-            sampled = (
-                f"their protocol ({theirs.individual_episodes} sampled episodes each, "
-                f"mean network {theirs.mean_network_episodes})"
-            )
-            tests += [
-                (f"{sampled}, their one-sample t", stored_test(theirs.one_sample, base)),
-                (f"{sampled}, Welch t", stored_test(theirs.welch, base)),
-            ]
-        for protocol, test in tests:
-            rows.append(
-                judge(
-                    "fig5.population_beats_mean",
-                    f"{label}, {protocol}, % of the mean network's return",
-                    test,
-                    budget,
-                )
-            )
-        reliabilities = [b.variance_split.reliability for b in (summary.normal, summary.long_legs)]
-        attenuation = math.sqrt(max(reliabilities[0], 0.0) * max(reliabilities[1], 0.0))
-        legs = stored_test(summary.legs.test)
-        rows.append(legs_row(label, legs, attenuation, budget, sd_below(_bound(summary.normal))))
-        rows += [
-            r for r in [variability_row(summary.normal, label, "title.variability.regime")] if r
+        protocols = []
+        if summary.mean_network is not None:
+            ours = summary.mean_network
+            paired = stored_test(ours.test, 100 / ours.mean_network_return)
+            tests = [("our protocol (paired, same states)", paired)]
+            protocols.append(("deterministic actions", summary, tests))
+        theirs = summary.authors_protocol
+        base = 100 / theirs.mean_network_mean
+        sampled = (
+            f"their protocol ({theirs.individual_episodes} sampled episodes each, "
+            f"mean network {theirs.mean_network_episodes})"
+        )
+        tests = [
+            (f"{sampled}, their one-sample t", stored_test(theirs.one_sample, base)),
+            (f"{sampled}, Welch t", stored_test(theirs.welch, base)),
         ]
+        protocols.append(("sampled actions", theirs, tests))
+        for actions, bodies, tests in protocols:
+            found = _protocol_rows(label, actions, bodies, tests, budget)
+            rows += found
+            if found[-1].key == "title.variability.regime":
+                group = (genome.cell_types, actions, n, episodes)
+                variability.setdefault(group, []).append(found[-1].test.estimate)
+    return rows + pooled_variability_rows(variability)
+
+
+def _protocol_rows(
+    label: str, actions: str, bodies: Record, tests: list[tuple[str, stats.Test]], budget: str
+) -> list[Row]:
+    """One genome's rows under one protocol: Figure 5 by each of ``tests``, Figure 4E, and
+    last the title's claim (left out where the mean return is not positive). ``bodies``:
+    the protocol's summary with its ``normal``, ``long_legs`` and ``legs``."""
+    rows = [
+        judge(
+            "fig5.population_beats_mean",
+            f"{label}, {protocol}, % of the mean network's return",
+            test,
+            budget,
+        )
+        for protocol, test in tests
+    ]
+    setting = f"{label}, {actions}"
+    normal, long_legs = bodies.normal, bodies.long_legs
+    reliabilities = [max(b.variance_split.reliability, 0.0) for b in (normal, long_legs)]
+    legs = stored_test(bodies.legs.test)
+    bound = sd_below(_bound(normal))
+    rows.append(legs_row(setting, legs, math.sqrt(math.prod(reliabilities)), budget, bound))
+    variability = variability_row(normal, setting, "title.variability.regime")
+    return rows + ([variability] if variability else [])
+
+
+def pooled_variability_rows(groups: dict[tuple[int, str, int, int], list[float]]) -> list[Row]:
+    """The title's claim per cell-type count and protocol over the regime's genomes, the
+    genome the unit: the mean of their SDs between individuals (% of the return) with its
+    one-sample t interval over genomes, against about 1 %. ``groups``: (cell types,
+    actions, individuals, episodes) -> each genome's SD; a group of one genome is left
+    out."""
+    rows = []
+    for (types, actions, n, episodes), sds in groups.items():
+        if len(sds) < 2:
+            continue
+        setting = (
+            f"ant, the authors' regime, {REGIME_STEPS}, {types} types, {len(sds)} genomes "
+            f"pooled (the genome the unit), {actions}"
+        )
+        budget = f"{len(sds)} genomes x {n} individuals x {episodes} episodes"
+        test = stats.one_sample(sds, 0.0)
+        rows.append(judge("title.variability.regime", setting, test, budget, unit="genomes"))
     return rows
 
 
@@ -619,32 +765,45 @@ def populations(payload: "Populations | None") -> dict[str, str]:
     return {"pop_complete": f"{done} of {len(genomes)} genomes"} | populations_rows_texts(rows)
 
 
+def _listed(rows: list[Row], key: str) -> str:
+    """Each row of claim ``key``: its setting (``regime_setting``), estimate with interval
+    and verdict; ``NOT_RUN`` without one."""
+    found = [r for r in rows if r.key == key]
+    return "; ".join(f"{regime_setting(r)}: {r.ours}, **{r.verdict}**" for r in found) or NOT_RUN
+
+
 def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
-    """Figures 4E and 5 on the genome of the authors' regime
-    (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``), the
-    normal body's test-retest reliability (``regime_pop_retest``: split-half r with its
-    95 % interval, and the reliability of the episode mean), and the rows of
-    ``regime_population_rows``: Figure 4E (``regime_pop_legs_*``) and Figure 5
-    under our protocol (``regime_pop_ours_*``), their one-sample t
-    (``regime_pop_theirs_*``) and Welch's (``regime_pop_welch_*``); ``NOT_RUN`` for all
-    without the file or its summary."""
+    """Figures 4E and 5 on the genomes of the authors' regime
+    (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``: the
+    genomes measured of those the grid trains), the normal body's test-retest reliability
+    under sampled actions (``regime_pop_retest``: the split-half r of each genome), and
+    each row of ``regime_population_rows``: Figure 4E (``regime_pop_legs``), Figure 5 by
+    Welch's t (``regime_pop_welch``) and paired under our protocol (``regime_pop_ours``);
+    ``NOT_RUN`` for all without the file or a summary."""
     rows = [] if payload is None else regime_population_rows(payload.results)
-    fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"] + [None] * 3
     texts = {"regime_pop_design": NOT_RUN, "regime_pop_retest": NOT_RUN}
     if rows:
-        genome = next(g for g in payload.results.genomes.values() if g.summary is not None)
-        normal = genome.summary.normal
-        split, anova = normal.split_half, normal.variance_split
-        texts["regime_pop_design"] = rows[0].budget
-        texts["regime_pop_retest"] = (
-            f"r = {split.r:.2f} [{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}] between "
-            f"the means of the even and the odd of {split.episodes} episodes, a "
-            f"reliability of {anova.reliability:.2f} for the mean of all of them"
+        genomes = payload.results.genomes
+        done = {k: g for k, g in genomes.items() if g.summary is not None}
+        names = ", ".join(f"{g.cell_types} types seed {g.training_seed}" for g in done.values())
+        budget = next(r.budget for r in rows if r.budget.startswith("1 genome"))
+        texts["regime_pop_design"] = (
+            f"{len(done)} of the {len(REGIME_PROFILES['cpu'].genomes)} genomes ({names}), "
+            f"each {budget.removeprefix('1 genome x ')}"
         )
-    texts |= row_texts("regime_pop_legs", next((r for r in rows if r.key == "fig4e.r_legs"), None))
-    for name, row in zip(("ours", "theirs", "welch"), fig5, strict=False):
-        texts |= row_texts(f"regime_pop_{name}", row)
-    return texts
+        texts["regime_pop_retest"] = "; ".join(
+            f"{g.cell_types} types seed {g.training_seed}: r = {split.r:.2f} "
+            f"[{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}]"
+            for g in done.values()
+            for split in [g.summary.authors_protocol.normal.split_half]
+        )
+    welch = [r for r in rows if "Welch" in r.setting]
+    paired = [r for r in rows if "our protocol" in r.setting]
+    return texts | {
+        "regime_pop_legs": _listed(rows, "fig4e.r_legs"),
+        "regime_pop_welch": _listed(welch, "fig5.population_beats_mean"),
+        "regime_pop_ours": _listed(paired, "fig5.population_beats_mean"),
+    }
 
 
 def populations_rows_texts(rows: list[Row]) -> dict[str, str]:
@@ -787,14 +946,6 @@ class OurProtocol(Record):
     test: StoredTest
 
 
-class TheirProtocol(Record):
-    individual_episodes: Count
-    mean_network_episodes: Count
-    mean_network_mean: Return
-    one_sample: StoredTest
-    welch: StoredTest
-
-
 class SplitHalf(Record):
     episodes: Count
     r: Correlation
@@ -809,17 +960,36 @@ class LegsTest(Record):
     test: StoredTest
 
 
-class RegimePopulationSummary(Record):
-    mean_network: OurProtocol
-    authors_protocol: TheirProtocol = None
+class TheirProtocol(Record):
+    """The authors' protocol on one genome: their Figure 5 comparison and the sampled
+    bodies' variance splits and r."""
+
+    individual_episodes: Count
+    mean_network_episodes: Count
+    mean_network_mean: Return
+    one_sample: StoredTest
+    welch: StoredTest
     normal: RegimeNormal
     long_legs: Split
     legs: LegsTest
 
 
+class RegimePopulationSummary(Record):
+    authors_protocol: TheirProtocol
+    mean_network: OurProtocol = None  # our protocol, where the genome was evaluated under it
+    normal: RegimeNormal = None
+    long_legs: Split = None
+    legs: LegsTest = None
+
+
+class SampledPart(Record):
+    sampled: ReturnsPart
+
+
 class RegimePopulationGenome(Record):
+    cell_types: Count
     training_seed: Seed
-    parts: NormalPart
+    parts: SampledPart
     summary: RegimePopulationSummary = None
 
 
