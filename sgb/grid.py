@@ -270,7 +270,8 @@ class Landed(NamedTuple):
 def land(source: Path, target: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> Landed:
     """Copy from the results directory ``source`` (the workers') into ``target`` what the
     runs of ``queue`` did: each finished run's checkpoint and sidecar (and its state file
-    removed from ``target``), each unfinished run's latest state, and each queued
+    removed from ``target``), each unfinished run's latest state, the states each run
+    keeps (``QueuedRun.kept``), and each queued
     experiment's results file; a finished run whose lock is still held (being saved) is
     left for the next landing."""
     changed: list[Path] = []
@@ -280,7 +281,7 @@ def land(source: Path, target: Path, queue: tuple[tuple[str, str], ...] = QUEUE)
             if runlock.holder(r.checkpoint) is not None and r.finished:
                 continue  # being written
             mine = [r.checkpoint, r.checkpoint.with_suffix(".json")] if r.finished else [r.state]
-            for file in mine:
+            for file in [*mine, *r.kept]:
                 if file.exists():
                     there = target / file.relative_to(source)
                     if _copy(file, there):

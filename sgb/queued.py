@@ -11,7 +11,8 @@ class QueuedRun:
     """One run of a queued experiment: its name; its checkpoint (a ``.msgpack`` with its
     ``.json`` sidecar, or for a run whose result goes into the results file, the path its
     lock is taken on); its state file while unfinished; its chunks; how many it has
-    finished and their wall time (s); and, once finished, its wall time (s)."""
+    finished and their wall time (s); once finished, its wall time (s); and the files it
+    keeps besides (``kept``: states part-way through, landed as they appear)."""
 
     label: str
     checkpoint: Path
@@ -21,6 +22,7 @@ class QueuedRun:
     wall_time_s: float | None = None
     chunks_done: int = 0
     spent_s: float = 0.0
+    kept: tuple[Path, ...] = ()
 
 
 @dataclass(frozen=True)

@@ -216,7 +216,7 @@ def test_the_authors_one_sample_t_leaves_out_the_mean_networks_error_and_welch_c
 def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains():
     config = populations.REGIME_PROFILES["cpu"]
     labels = [populations.genome_label(g) for g in config.genomes]
-    assert labels[:2] == ["ant_regime_k128_s0", "ant_regime_k16_s0"] and len(labels) == 12
+    assert labels[:2] == ["ant_regime_k128_s0", "ant_regime_k16_s0"] and len(labels) == 13
     assert (config.n_individuals, config.episodes) == (100, 64)
     by_label = dict(zip(labels, config.genomes, strict=True))
     k64, k128 = by_label["ant_regime_k64_s0"], by_label["ant_regime_k128_s0"]
@@ -234,10 +234,19 @@ def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains
     queued = populations.queued("cpu", results)
     assert [r.chunks for r in queued.runs[:2]] == [3, 3]
     assert "(its training has not landed)" in queued.runs[labels.index("ant_regime_k64_s0")].label
+    # the same genome part-way: the state its run keeps after chunk 2, 10^7 steps in
+    early = by_label["ant_regime_k64_s0_chunk2"]
+    assert populations.checkpoint_path(early, config) == (
+        "rl/checkpoints/ant_regime_k64_s0_cpu.chunk2.npz"
+    )
+    assert populations.genome_steps(early, config) == 9_830_400
+    assert populations.genome_steps(k64, config) == 50_000_000
     with pytest.raises(ValueError, match="authors' settings"):
         populations.Genome("ours", 0, regime=True)
     with pytest.raises(ValueError, match="protocol"):
         populations.Genome("authors", 0, protocols=("theirs",))
+    with pytest.raises(ValueError, match="part-way"):
+        populations.Genome("authors", 0, chunk=2)
 
 
 def test_pooled_population_rows_find_a_known_advantage_over_the_mean_network():
@@ -298,6 +307,7 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
         genomes[f"k64_s{seed}"] = {
             "cell_types": 64,
             "training_seed": seed,
+            "trained_steps": 50_000_000,
             "parts": {k: {"returns": v.tolist()} for k, v in parts.items()},
             "summary": populations.genome_summary(parts),
         }

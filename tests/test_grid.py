@@ -87,7 +87,9 @@ def _curve(results: Path, name: str) -> tuple[list[float], list[np.ndarray]]:
 def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, monkeypatch, capsys):
     """Workers' results (a run killed in its second chunk) are landed in the repository; a
     fresh copy of it resumes the run at its second chunk, and the run ends as one never
-    stopped; landed again, the finished run replaces its state."""
+    stopped; landed again, the finished run replaces its state, and the state the 16-type
+    run keeps after its first chunk lands with it."""
+    monkeypatch.setattr(regime_runs, "KEPT_CHUNKS", {16: (1,)})
     config = regime_runs.RUNS["smoke"]
     vanilla = regime_runs.run_config(config, config.runs[0])
     name = config.runs[0].checkpoint("smoke")
@@ -117,6 +119,8 @@ def test_a_landed_state_lets_a_fresh_copy_resume_its_run_bit_for_bit(tmp_path, m
 
     again = grid.land(clone, repository, SMOKE)
     assert not state.exists() and state in again.runs
+    kept = repository / "rl" / "checkpoints" / "ant_regime_k16_s0_smoke.chunk1.npz"
+    assert kept in again.runs and kept.exists()
     assert again.results == [repository / "rl" / "regime_ant_smoke.json"]
     listing = grid.describe(next(grid.queues(repository, SMOKE))[2])
     assert [line.split(": ")[1].split(" (")[0] for line in listing[:2]] == ["done", "done"]

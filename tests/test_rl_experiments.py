@@ -205,7 +205,7 @@ def test_the_run_loop_trains_the_runs_no_other_process_holds_and_writes_after_ea
 
     events = []
 
-    def trained(ppo, seed, checkpoint, profile, label):
+    def trained(ppo, seed, checkpoint, profile, label, keep):
         events.append(label)
         return checkpoint.name != "reused"
 

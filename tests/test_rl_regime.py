@@ -19,7 +19,7 @@ from sgb.experiments import regime_gait
 from sgb.rl.agent import Network, NetworkConfig, Params, tanh_gaussian_log_prob
 from sgb.rl.losses import entropy_estimate
 from sgb.rl.normalizer import init_normalizer, normalize, update
-from sgb.rl.ppo import PPOConfig, init_state, initial_params, train
+from sgb.rl.ppo import PPOConfig, init_state, initial_params, state_agent, train
 from sgb.rl.regimes import authors_regime, with_settings
 from sgb.rl.trainer import make_trainer
 
@@ -291,7 +291,8 @@ def test_the_authors_evaluate_at_step_0_and_after_every_chunk():
 
 def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path, monkeypatch):
     """Its state file keeps no environment state (every chunk resets them from the kept
-    key), and the resumed run ends bit-identical to one never stopped."""
+    key), and the resumed run ends bit-identical to one never stopped; a state it keeps
+    (``train``'s ``keep``) holds the agent of its chunk."""
     config = replace(
         _authors(NetworkConfig(hidden=(8,)), total_steps=3 * 2 * 4 * 5 * 2), num_evals=3
     )
@@ -305,9 +306,18 @@ def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path
         kept = len(saved.files) - 1  # one entry is the meta
     env_leaves = len(jax.tree_util.tree_leaves((ts.env_state, ts.start_state)))
     assert kept == len(jax.tree_util.tree_leaves(ts)) - env_leaves
-    resumed = train(config, seed=1, progress=False, state_file=state_file)
+    kept = {1: tmp_path / "run.chunk1.npz", 3: tmp_path / "run.chunk3.npz"}
+    resumed = train(config, seed=1, progress=False, state_file=state_file, keep=kept)
     assert resumed.eval_returns == uninterrupted.eval_returns
     _assert_same_params(resumed.params, uninterrupted.params)
+    # the states it keeps: chunk 1 was trained before the kill, so only chunk 3's is
+    # written, and it is the agent the run ends with; keeping changes nothing trained
+    assert not kept[1].exists()
+    actor, normalizer = state_agent(kept[3], config, 1)
+    _assert_same_params(Params(actor, uninterrupted.params.critic), uninterrupted.params)
+    _assert_same_params(normalizer, uninterrupted.normalizer)
+    with pytest.raises(ValueError, match="another run"):
+        state_agent(kept[3], config, 2)
 
 
 @pytest.mark.parametrize("direction", [1.0, -1.0])

@@ -49,6 +49,7 @@ show a spread far larger than the per-genome errors, not rule out one of their s
 its interval (t = 4.30) is what a claim about the setting's genomes in general must use.
 """
 
+import hashlib
 import json
 import math
 import time
@@ -78,9 +79,10 @@ from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
 from sgb.rl import regime_runs
 from sgb.rl.population import population_returns
+from sgb.rl.ppo import state_agent
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
-from sgb.rl.runs import checkpoint_name, checkpoint_root, finished_run
+from sgb.rl.runs import checkpoint_name, checkpoint_root, finished_run, kept_state
 from sgb.schemas import (
     Correlation,
     Count,
@@ -121,6 +123,7 @@ class Genome:
     cell_types: int = 64
     regime: bool = False
     protocols: tuple[str, ...] = ("ours",)  # of PROTOCOLS, the ones it is evaluated under
+    chunk: int | None = None  # a regime genome part-way: the state its run kept after it
 
     def __post_init__(self) -> None:
         validation.choice("settings", self.settings, SETTINGS)
@@ -131,6 +134,8 @@ class Genome:
             raise ValueError("a genome is evaluated under at least one protocol")
         for protocol in self.protocols:
             validation.choice("protocol", protocol, tuple(PROTOCOLS))
+        if self.chunk is not None and not self.regime:
+            raise ValueError("only a regime genome is kept part-way through its training")
 
     @property
     def parts(self) -> tuple[str, ...]:
@@ -138,10 +143,12 @@ class Genome:
         return tuple(part for protocol in self.protocols for part in PROTOCOLS[protocol])
 
     def checkpoint(self, profile: str, env: str = "ant") -> str:
-        """The file name of its checkpoint, trained at ``profile``."""
-        return checkpoint_name(
+        """The file name of its checkpoint, trained at ``profile`` (of the state its run
+        kept, part-way: ``sgb.rl.runs.kept_state``)."""
+        name = checkpoint_name(
             env, self.cell_types, self.seed, profile, self.settings, regime=self.regime
         )
+        return name if self.chunk is None else kept_state(Path(name), self.chunk).name
 
 
 @dataclass(frozen=True)
@@ -168,8 +175,9 @@ class PopulationsConfig:
 
 def genome_label(genome: Genome, env: str = "ant") -> str:
     """The genome's name in the results and the progress: e.g. ``ant_k64_authors_s1``,
-    ``ant_regime_k64_s0``."""
-    return genome.checkpoint("cpu", env).removesuffix("_cpu.msgpack")
+    ``ant_regime_k64_s0``, ``ant_regime_k64_s0_chunk2``."""
+    label = replace(genome, chunk=None).checkpoint("cpu", env).removesuffix("_cpu.msgpack")
+    return label if genome.chunk is None else f"{label}_chunk{genome.chunk}"
 
 
 def checkpoint_path(genome: Genome, config: PopulationsConfig, env: str = "ant") -> str:
@@ -200,7 +208,9 @@ def regime_populations_config(profile: str) -> PopulationsConfig:
     """Figures 4E and 5 on every SGB genome of the authors' regime at the paper's budget
     (``sgb.rl.regime_runs.grid``: 128 and 16 types at seeds 0-2, in the order they train,
     then 64 types at seeds 0-2) under the authors' protocol, and under ours too for the 64
-    types: 100 individuals x 64 episodes of 1000 steps at ``cpu`` and ``paper``; at
+    types; and the 64-type seed-0 genome after 10^7 steps (the state its run keeps after
+    chunk 2) under the authors' protocol: 100 individuals x 64 episodes of 1000 steps at
+    ``cpu`` and ``paper``; at
     ``smoke`` the regime's 16-type smoke genome (``reproduce regime --profile smoke`` makes
     it), 4 individuals x 3 episodes of 50."""
     check_profile(profile)
@@ -209,17 +219,14 @@ def regime_populations_config(profile: str) -> PopulationsConfig:
         genomes = (Genome("authors", 0, 16, regime=True, protocols=both),)
         return PopulationsConfig(genomes, 4, 3, 50, source="smoke")
     grid = [r for r in regime_runs.grid() if r.cell_types and r.genome == "authors"]
-    genomes = tuple(
-        Genome(
-            "authors",
-            r.seed,
-            r.cell_types,
-            regime=True,
-            protocols=both if r.cell_types == 64 else ("authors",),
-        )
-        for r in grid
-    )
-    return PopulationsConfig(genomes, 100, 64, 1000, source=profile)
+    genomes = []
+    for r in grid:
+        protocols = both if r.cell_types == 64 else ("authors",)
+        genomes.append(Genome("authors", r.seed, r.cell_types, True, protocols))
+        if (r.cell_types, r.seed) == (64, 0):  # the same genome part-way, as its run kept it
+            kept = regime_runs.KEPT_CHUNKS[64][0]
+            genomes.append(Genome("authors", 0, 64, True, ("authors",), chunk=kept))
+    return PopulationsConfig(tuple(genomes), 100, 64, 1000, source=profile)
 
 
 REGIME_PROFILES = {p: regime_populations_config(p) for p in PROFILE_NAMES}
@@ -429,14 +436,18 @@ def evaluate_part(agent: tuple, part: str, config: PopulationsConfig, seed: int)
 
 
 def summarise(results: dict, config: PopulationsConfig) -> dict:
-    """``results`` with every finished genome's summary, the pooled summaries of every
-    setting (our protocol), and whether the design is complete."""
+    """``results`` with every finished genome's summary, each regime genome's steps
+    trained, the pooled summaries of every setting (our protocol), and whether the design
+    is complete."""
     genomes = results["genomes"]
     done = {
         genome_label(g): g
         for g in config.genomes
         if set(g.parts) <= set(genomes.get(genome_label(g), {}).get("parts", {}))
     }
+    for genome in config.genomes:
+        if genome.regime and genome_label(genome) in genomes:
+            genomes[genome_label(genome)]["trained_steps"] = genome_steps(genome, config)
     for label, genome in done.items():
         parts = genomes[label]["parts"]
         genomes[label]["summary"] = genome_summary({p: parts[p]["returns"] for p in genome.parts})
@@ -471,11 +482,34 @@ def landed(genome: Genome, config: PopulationsConfig, out_dir: Path, env: str = 
     (``sgb.rl.regime_runs.run_config``), not an earlier one under its name."""
     checkpoint = checkpoint_path(genome, config, env)
     path = checkpoint_root(out_dir, checkpoint) / checkpoint
-    if not genome.regime:
-        return path.exists()
+    if not genome.regime or genome.chunk is not None:
+        return path.exists()  # a kept state says which run it is of when it is read
     runs = regime_runs.RUNS[config.source]
     run = regime_runs.RegimeRun(genome.cell_types, genome.seed)
     return finished_run(path, regime_runs.run_config(runs, run)) is not None
+
+
+def genome_agent(genome: Genome, config: PopulationsConfig, out_dir: Path) -> tuple:
+    """(PPO settings, actor parameters, normalizer) of ``genome``: from its checkpoint, or
+    for a genome part-way (``Genome.chunk``) from the state its regime run kept."""
+    checkpoint = checkpoint_path(genome, config)
+    path = checkpoint_root(out_dir, checkpoint) / checkpoint
+    if genome.chunk is None:
+        return load_agent(path)
+    runs = regime_runs.RUNS[config.source]
+    ppo = regime_runs.run_config(runs, regime_runs.RegimeRun(genome.cell_types, genome.seed))
+    return (ppo, *state_agent(path, ppo, genome.seed))
+
+
+def genome_steps(genome: Genome, config: PopulationsConfig) -> int | None:
+    """The environment steps a regime genome trained, nominal for a finished run as its
+    settings give them (``None`` for another genome)."""
+    if not genome.regime:
+        return None
+    runs = regime_runs.RUNS[config.source]
+    return (
+        runs.ppo.total_steps if genome.chunk is None else regime_runs.steps_at(runs, genome.chunk)
+    )
 
 
 def genome_lock(results: Path, genome: Genome, env: str = "ant") -> Path:
@@ -523,9 +557,8 @@ def _evaluate(recording: Recording, out_dir: Path) -> Path:
         eta = eta_s(time.perf_counter() - recording.began, k * steps, (len(todo) - k) * steps)
         count = plan.index((j, genome, part)) + 1
         print(f"{name} {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
-        checkpoint = checkpoint_path(genome, config, env)
         if label not in agents:
-            agents = {label: load_agent(checkpoint_root(out_dir, checkpoint) / checkpoint)}
+            agents = {label: genome_agent(genome, config, out_dir)}
         with runlock.exclusive(genome_lock(path, genome, env)):
             tic = time.perf_counter()
             returns = evaluate_part(agents[label], part, config, config.seed + j)
@@ -587,9 +620,13 @@ def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> 
 
 
 def checkpoint_digest(checkpoint: Path) -> str:
-    """The SHA-256 of ``checkpoint``'s parameters, as its sidecar records it: a genome's
-    parts are reused only while the checkpoint they were evaluated on is the same."""
-    return json.loads(checkpoint.with_suffix(".json").read_text())["sha256"]
+    """The SHA-256 of ``checkpoint``'s parameters, as its sidecar records it (of a kept
+    state's bytes): a genome's parts are reused only while the checkpoint they were
+    evaluated on is the same."""
+    sidecar = checkpoint.with_suffix(".json")
+    if sidecar.exists():
+        return json.loads(sidecar.read_text())["sha256"]
+    return hashlib.sha256(checkpoint.read_bytes()).hexdigest()
 
 
 def _has(results: dict, genome: Genome, part: str, env: str) -> bool:
@@ -676,8 +713,9 @@ def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
         if summary is None:
             continue
         n, episodes = np.shape(genome.parts.sampled.returns)
+        steps = regime_steps(genome.trained_steps)
         label = (
-            f"ant, the authors' regime, {REGIME_STEPS}, {genome.cell_types} types, "
+            f"ant, the authors' regime, {steps}, {genome.cell_types} types, "
             f"seed {genome.training_seed}"
         )
         budget = f"1 genome x {n} individuals x {episodes} episodes"
@@ -700,11 +738,18 @@ def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
         protocols.append(("sampled actions", theirs, tests))
         for actions, bodies, tests in protocols:
             found = _protocol_rows(label, actions, bodies, tests, budget)
-            rows += found
+            rows += [replace(r, amount=genome.trained_steps) for r in found]
             if found[-1].key == "title.variability.regime":
-                group = (genome.cell_types, actions, n, episodes)
+                group = (genome.trained_steps, genome.cell_types, actions, n, episodes)
                 variability.setdefault(group, []).append(found[-1].test.estimate)
     return rows + pooled_variability_rows(variability)
+
+
+def regime_steps(steps: int) -> str:
+    """A regime genome's training in a row's setting: ``REGIME_STEPS`` for a finished run,
+    else e.g. ``9.83 x 10^6 steps``."""
+    finished = regime_runs.RUNS["cpu"].ppo.total_steps
+    return REGIME_STEPS if steps == finished else f"{steps / 1e6:.3g} x 10^6 steps"
 
 
 def _protocol_rows(
@@ -732,23 +777,26 @@ def _protocol_rows(
     return rows + ([variability] if variability else [])
 
 
-def pooled_variability_rows(groups: dict[tuple[int, str, int, int], list[float]]) -> list[Row]:
-    """The title's claim per cell-type count and protocol over the regime's genomes, the
-    genome the unit: the mean of their SDs between individuals (% of the return) with its
-    one-sample t interval over genomes, against about 1 %. ``groups``: (cell types,
-    actions, individuals, episodes) -> each genome's SD; a group of one genome is left
-    out."""
+def pooled_variability_rows(
+    groups: dict[tuple[int, int, str, int, int], list[float]],
+) -> list[Row]:
+    """The title's claim per training, cell-type count and protocol over the regime's
+    genomes, the genome the unit: the mean of their SDs between individuals (% of the
+    return) with its one-sample t interval over genomes, against about 1 %. ``groups``:
+    (steps trained, cell types, actions, individuals, episodes) -> each genome's SD; a
+    group of one genome is left out."""
     rows = []
-    for (types, actions, n, episodes), sds in groups.items():
+    for (steps, types, actions, n, episodes), sds in groups.items():
         if len(sds) < 2:
             continue
         setting = (
-            f"ant, the authors' regime, {REGIME_STEPS}, {types} types, {len(sds)} genomes "
-            f"pooled (the genome the unit), {actions}"
+            f"ant, the authors' regime, {regime_steps(steps)}, {types} types, {len(sds)} "
+            f"genomes pooled (the genome the unit), {actions}"
         )
         budget = f"{len(sds)} genomes x {n} individuals x {episodes} episodes"
         test = stats.one_sample(sds, 0.0)
-        rows.append(judge("title.variability.regime", setting, test, budget, unit="genomes"))
+        row = judge("title.variability.regime", setting, test, budget, unit="genomes")
+        rows.append(replace(row, amount=steps))
     return rows
 
 
@@ -772,6 +820,13 @@ def _listed(rows: list[Row], key: str) -> str:
     return "; ".join(f"{regime_setting(r)}: {r.ours}, **{r.verdict}**" for r in found) or NOT_RUN
 
 
+def _genome_name(genome: "RegimePopulationGenome") -> str:
+    """E.g. ``128 types seed 0``, ``64 types seed 0 after 9.83 x 10^6 steps``."""
+    name = f"{genome.cell_types} types seed {genome.training_seed}"
+    steps = regime_steps(genome.trained_steps)
+    return name if steps == REGIME_STEPS else f"{name} after {steps}"
+
+
 def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     """Figures 4E and 5 on the genomes of the authors' regime
     (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``: the
@@ -785,15 +840,14 @@ def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     if rows:
         genomes = payload.results.genomes
         done = {k: g for k, g in genomes.items() if g.summary is not None}
-        names = ", ".join(f"{g.cell_types} types seed {g.training_seed}" for g in done.values())
+        names = ", ".join(_genome_name(g) for g in done.values())
         budget = next(r.budget for r in rows if r.budget.startswith("1 genome"))
         texts["regime_pop_design"] = (
             f"{len(done)} of the {len(REGIME_PROFILES['cpu'].genomes)} genomes ({names}), "
             f"each {budget.removeprefix('1 genome x ')}"
         )
         texts["regime_pop_retest"] = "; ".join(
-            f"{g.cell_types} types seed {g.training_seed}: r = {split.r:.2f} "
-            f"[{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}]"
+            f"{_genome_name(g)}: r = {split.r:.2f} [{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}]"
             for g in done.values()
             for split in [g.summary.authors_protocol.normal.split_half]
         )
@@ -827,13 +881,10 @@ def evidence(records: Records) -> list[Row]:
 
 
 def regime_evidence(records: Records) -> list[Row]:
-    """The population of the regime's genome under both protocols
-    (``regime_population_rows``), their budget the steps that genome trained."""
+    """The populations of the regime's genomes (``regime_population_rows``), each row's
+    budget the steps its genome trained."""
     payload = records.get("regime_populations")
-    if payload is None:
-        return []
-    steps = trained_steps(records.get("regime"))
-    return genomes_at(regime_population_rows(payload.results), steps)
+    return [] if payload is None else regime_population_rows(payload.results)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -989,6 +1040,7 @@ class SampledPart(Record):
 class RegimePopulationGenome(Record):
     cell_types: Count
     training_seed: Seed
+    trained_steps: Count
     parts: SampledPart
     summary: RegimePopulationSummary = None
 

@@ -41,9 +41,9 @@ from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
 from sgb.results import Records
 from sgb.rl import checkpoints
-from sgb.rl.regime_runs import RUNS, finished_runs, run_config, train_regime
+from sgb.rl.regime_runs import RUNS, finished_runs, kept_chunks, run_config, train_regime
 from sgb.rl.regimes import authors_scale
-from sgb.rl.runs import CHECKPOINT_DIR, finished_run, seed_sem
+from sgb.rl.runs import CHECKPOINT_DIR, finished_run, kept_state, seed_sem
 from sgb.schemas import (
     Count,
     Finite,
@@ -90,6 +90,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
                 wall_time_s=None if record is None else record["wall_time_s"],
                 chunks_done=progress.get("chunks", 0),
                 spent_s=progress.get("wall_time_s", 0.0),
+                kept=tuple(kept_state(checkpoint, chunk) for chunk in kept_chunks(r)),
             )
         )
     return Queue(results_file(Path(results_dir) / "rl", "regime_ant", profile), tuple(runs))

@@ -284,6 +284,16 @@ def _kept(ts: TrainState, config: PPOConfig) -> TrainState:
     return ts
 
 
+def state_agent(path: str | Path, config: PPOConfig, seed: int) -> tuple[dict, Normalizer]:
+    """The actor parameters and observation normalizer of the training state at ``path``
+    (a state file or one ``train`` kept) of ``config`` trained with ``seed``; a
+    ValueError if the file belongs to another run."""
+    template = _kept(init_state(config, seed), config)
+    run = {"config": repr(config), "seed": seed}
+    ts, _ = resume.load(path, template, run, finite=lambda ts: (ts.params, ts.normalizer))
+    return ts.params.actor, ts.normalizer
+
+
 def train(
     config: PPOConfig,
     seed: int = 0,
@@ -291,6 +301,7 @@ def train(
     state_file: str | Path | None = None,
     label: str = "PPO",
     initial: Start | None = None,
+    keep: dict[int, Path] | None = None,
 ) -> TrainResult:
     """Train with PPO; evaluates ``num_evals`` times, the last one after the final update
     (and first at step 0 with ``eval_at_start``). With ``initial`` the run starts from its
@@ -312,7 +323,9 @@ def train(
     its progress bar. Training stops (``sgb.divergence.TrainingDiverged``) when the loss
     is not finite or its magnitude exceeds ``sgb.divergence.BLOWUP_FACTOR`` times that of
     the first one of this call. A state file is known by the run's config and seed only:
-    runs from different ``initial`` starts need files of their own.
+    runs from different ``initial`` starts need files of their own. ``keep`` (chunk ->
+    path): the state after that chunk is also written there and kept, the agent as it was
+    at that point of training (``state_agent``); what is trained is the same.
     """
     start = time.perf_counter()
     ts = init_state(config, seed, initial)
@@ -371,9 +384,10 @@ def train(
         done["eval_returns"].append(ret)
         done["eval_sigmas"].append(layer_sigmas(ts.params.actor))
         done["chunks"] = i + 1
-        if state_file is not None:
-            elapsed = done["wall_time_s"] + time.perf_counter() - start
-            resume.save(state_file, _kept(ts, config), run, {**done, "wall_time_s": elapsed})
+        elapsed = done["wall_time_s"] + time.perf_counter() - start
+        for path in [state_file, (keep or {}).get(i + 1)]:
+            if path is not None:
+                resume.save(path, _kept(ts, config), run, {**done, "wall_time_s": elapsed})
     return TrainResult(
         config=config,
         params=ts.params,

@@ -16,6 +16,9 @@ from sgb.rl.sweep import ppo_settings
 GENOMES = ("authors", "authors_aliased")  # a Gaussian per type pair; their aliased layers
 SEEDS = tuple(range(3))
 INTERIM_EVAL_ENVS = 256  # environments of every evaluation but the last
+# The 64-type runs keep their state after chunk 2 of 10 (10^7 of the 5 x 10^7 steps): their
+# genome part-way through training, for the populations (does variability fall with it?).
+KEPT_CHUNKS = {64: (2,)}  # cell types -> chunks
 
 
 @dataclass(frozen=True)
@@ -110,7 +113,8 @@ def run_config(config: RegimeRuns, run: RegimeRun) -> PPOConfig:
 def train_regime(
     config: RegimeRuns, profile: str, checkpoints: Path, name: str, write: Callable[[], Path]
 ) -> Path:
-    """Train each run of ``config`` not yet trained into ``checkpoints`` (``sgb.rl.runs.
+    """Train each run of ``config`` not yet trained into ``checkpoints``, keeping the states
+    of ``kept_chunks`` (``sgb.rl.runs.
     train_runs``, labelled ``name``), calling ``write`` after each; the results file."""
     runs = [
         (
@@ -121,7 +125,20 @@ def train_regime(
         )
         for r in config.runs
     ]
-    return train_runs(runs, profile, write)
+    kept = {checkpoints / r.checkpoint(profile): kept_chunks(r) for r in config.runs}
+    return train_runs(runs, profile, write, kept.__getitem__)
+
+
+def kept_chunks(run: RegimeRun) -> tuple[int, ...]:
+    """The chunks after which ``run`` keeps its training state (``KEPT_CHUNKS``; not for
+    an aliased run)."""
+    return KEPT_CHUNKS.get(run.cell_types, ()) if run.genome == "authors" else ()
+
+
+def steps_at(config: RegimeRuns, chunk: int) -> int:
+    """The environment steps a run of ``config`` has trained after ``chunk``."""
+    ppo = config.ppo
+    return chunk * max(1, ppo.iterations // ppo.num_evals) * ppo.steps_per_iteration
 
 
 def finished_runs(

@@ -54,16 +54,31 @@ def checkpoint_root(out_dir: Path, checkpoint: str) -> Path:
     return Path(out_dir) if (Path(out_dir) / checkpoint).exists() else committed_results()
 
 
-def trained_run(ppo: PPOConfig, seed: int, checkpoint: Path, profile: str, label: str) -> bool:
+def kept_state(checkpoint: Path, chunk: int) -> Path:
+    """Where the run of ``checkpoint`` keeps its training state after ``chunk``
+    (``sgb.rl.ppo.train``'s ``keep``): ``<checkpoint stem>.chunk<chunk>.npz`` beside it."""
+    return checkpoint.with_name(f"{checkpoint.stem}.chunk{chunk}.npz")
+
+
+def trained_run(
+    ppo: PPOConfig,
+    seed: int,
+    checkpoint: Path,
+    profile: str,
+    label: str,
+    keep: tuple[int, ...] = (),
+) -> bool:
     """Make sure ``checkpoint`` holds ``ppo`` trained with ``seed``: train it unless it
     does (a killed run continues from its training state, ``*.state.npz``, kept beside
-    it); returns whether it trained now. ``label`` names the run in what it prints."""
+    it), keeping its state after each chunk of ``keep`` (``kept_state``); returns whether
+    it trained now. ``label`` names the run in what it prints."""
     if finished_run(checkpoint, ppo) is not None:
         print(f"{label}: reused {checkpoint}", flush=True)
         return False
     state_file = checkpoint.with_suffix(".state.npz")
     print(f"{label}: {'resumed' if state_file.exists() else 'training'}", flush=True)
-    result = train(ppo, seed=seed, state_file=state_file, label=label)
+    kept = {chunk: kept_state(checkpoint, chunk) for chunk in keep}
+    result = train(ppo, seed=seed, state_file=state_file, label=label, keep=kept)
     checkpoints.save(checkpoint, result, provenance(ppo, profile, [seed], result.wall_time_s))
     state_file.unlink()
     return True
@@ -73,18 +88,20 @@ def train_runs(
     runs: Sequence[tuple[str, PPOConfig, int, Path]],
     profile: str,
     write: Callable[[], Path],
+    keep: Callable[[Path], tuple[int, ...]] = lambda checkpoint: (),
 ) -> Path:
     """Train each of ``runs`` (a label, its settings, seed and checkpoint), in order, that
-    no other process holds (``sgb.runlock``), each once (``trained_run``), calling
-    ``write`` (the results file from every finished checkpoint) after each run trained
-    and once at the end; returns what that last ``write`` returns."""
+    no other process holds (``sgb.runlock``), each once (``trained_run``, keeping the
+    states after the chunks ``keep`` names for its checkpoint), calling ``write`` (the
+    results file from every finished checkpoint) after each run trained and once at the
+    end; returns what that last ``write`` returns."""
     for i, (label, ppo, seed, checkpoint) in enumerate(runs):
         label = f"{label} ({i + 1}/{len(runs)})"
         with runlock.claim(checkpoint) as mine:
             if not mine:
                 print(f"{label}: another process is training it", flush=True)
                 continue
-            if trained_run(ppo, seed, checkpoint, profile, label):
+            if trained_run(ppo, seed, checkpoint, profile, label, keep(checkpoint)):
                 write()
     return write()
 
