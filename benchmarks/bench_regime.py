@@ -12,7 +12,12 @@ round, after a compiling call):
 - ``update``: the 4 x 32 minibatch steps alone (``Trainer.sgd``) on a stored batch;
 - ``iteration``: whole iterations (``Trainer.iterations``: collection, normaliser, update);
 - ``evaluation``: one of the authors' evaluations (``Trainer.window_return`` on 2048
-  environments for 1000 steps), counted apart; a run makes ``num_evals + 1`` of them.
+  environments for 1000 steps), counted apart; a run makes ``num_evals + 1`` of them;
+- where the update's time goes, over the same 4 x 32 minibatches of the stored batch:
+  ``loss forward`` (the PPO loss alone, ``sgb.rl.losses.ppo_loss``) and ``loss
+  gradients`` (its gradient, no optimiser step); ``update_shares`` splits the update
+  into the forward pass, the backward pass (gradients less forward) and the optimiser
+  (update less gradients).
 
 Each phase is printed as env-steps/s (the environment steps an iteration trains on, per
 second) and as a ratio to the simulator's; the bound is collection and update measured
@@ -97,7 +102,18 @@ def phases(cell_types: int | None, iterations: int) -> dict:
     b = jax.random.normal(jax.random.PRNGKey(4), (128, 128))
     matmul = jax.jit(lambda a, b: jax.lax.fori_loop(0, 64, lambda _, x: jax.numpy.tanh(x @ b), a))
     evaluation = replace(config, eval_individuals=e)
+    settings = config.step_settings()
+
+    def loss(params, batch, key):
+        return ppo_loss(params, batch, ts.normalizer, key, trainer.agent, settings.loss)[0]
+
     return {
+        "loss forward": (_minibatches(loss, settings), (ts.params, data, ts.key), steps),
+        "loss gradients": (
+            _minibatches(jax.grad(loss), settings),
+            (ts.params, data, ts.key),
+            steps,
+        ),
         "simulator": (simulate, (ts.env_state,), steps),
         "collection": (collect, (ts,), steps),
         "update": (sgd, (ts, data), steps),
@@ -117,6 +133,33 @@ def phases(cell_types: int | None, iterations: int) -> dict:
     }
 
 
+def _minibatches(step, settings):
+    """Jitted ``(params, data, key) -> sum``: ``step(params, minibatch, key)`` on every
+    minibatch of the update's epochs (the same shapes and gathers as ``Trainer.sgd``,
+    the parameters held fixed), its outputs summed so that none is left out."""
+    import jax
+    import jax.numpy as jnp
+
+    s = settings
+    samples = s.num_envs * s.unrolls_per_iteration
+    count = s.num_epochs * s.num_minibatches
+
+    def run(params, data, key):
+        def minibatch(total, xs):
+            idx, k = xs
+            batch = jax.tree_util.tree_map(lambda x: x[idx], data)
+            leaves = jax.tree_util.tree_leaves(step(params, batch, k))
+            return total + sum(jnp.sum(leaf) for leaf in leaves), None
+
+        perms = jax.vmap(lambda k: jax.random.permutation(k, samples))(
+            jax.random.split(key, s.num_epochs)
+        )
+        xs = (perms.reshape(count, -1), jax.random.split(key, count))
+        return jax.lax.scan(minibatch, 0.0, xs)[0]
+
+    return jax.jit(run)
+
+
 def _flops(fn, *args) -> float:
     """XLA's count of the floating-point operations of one call of jitted ``fn``."""
     cost = fn.lower(*args).compile().cost_analysis()
@@ -128,6 +171,7 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
     to the simulator, the bound and the share of a run's time its evaluations take."""
     measured = phases(cell_types, iterations)
     names = ("simulator", "collection", "update", "iteration", "evaluation", "matmul")
+    names += ("loss forward", "loss gradients")
     for name in names:  # compile
         fn, args, _ = measured[name]
         _timed(fn, *args)
@@ -138,7 +182,15 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
             seconds[name].append(_timed(fn, *args))
     rate = {n: measured[n][2] / statistics.median(seconds[n]) for n in names}
     matmul_gflops = rate.pop("matmul") / 1e9
-    names = names[:-1]
+    names = tuple(n for n in names if n != "matmul")
+    update, forward, gradients = (
+        statistics.median(seconds[n]) for n in ("update", "loss forward", "loss gradients")
+    )
+    shares = {
+        "forward": forward / update,
+        "backward": (gradients - forward) / update,
+        "optimizer": (update - gradients) / update,
+    }
     bound = 1.0 / (1.0 / rate["collection"] + 1.0 / rate["update"])
     train_s = measured["iterations_per_run"] * measured["steps_per_iteration"] / rate["iteration"]
     eval_s = measured["evals_per_run"] * measured["evaluation"][2] / rate["evaluation"]
@@ -154,13 +206,15 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
         "update_gflops": measured["sgd_flops_per_env_step"] * rate["update"] / 1e9,
         "matmul_gflops": matmul_gflops,
         "run_hours": {"training": train_s / 3600, "evaluations": eval_s / 3600},
+        "update_shares": shares,
     }
 
 
 def table(rows: list[dict]) -> str:
     """The results as a text table: env-steps/s and the ratio to the simulator."""
     lines = [f"{'phase':<12}" + "".join(f"{_name(r):>24}" for r in rows)]
-    for phase in ("simulator", "collection", "update", "iteration", "evaluation"):
+    phases = ("simulator", "collection", "update", "iteration", "evaluation")
+    for phase in (*phases, "loss forward", "loss gradients"):
         cells = [
             f"{r['env_steps_per_s'][phase]:>14,.0f} ({r['ratio_to_simulator'][phase]:.2f}x)"
             for r in rows
@@ -179,6 +233,9 @@ def table(rows: list[dict]) -> str:
     for part in ("training", "evaluations"):
         hours = "".join(f"{r['run_hours'][part]:>23.2f}h" for r in rows)
         lines.append(f"{'run ' + part:<12}" + hours)
+    for part in ("forward", "backward", "optimizer"):
+        shares = "".join(f"{r['update_shares'][part]:>24.2f}" for r in rows)
+        lines.append(f"{'update ' + part:<12}" + shares)
     return "\n".join(lines)
 
 

@@ -236,6 +236,7 @@ class BenchRegimeRow(Record):
     update_gflops: Positive
     matmul_gflops: Positive
     run_hours: Each(Positive)
+    update_shares: Each(Finite) = None  # forward, backward, optimiser (since the breakdown)
 
 
 class BenchRegimeResults(Record):
