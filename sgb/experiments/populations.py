@@ -692,12 +692,17 @@ def populations_rows(results: "PopulationsResults") -> list[Row]:
         bound = max(_bound(g.normal) for g in done)
         attenuation = float(np.mean(np.sqrt(rels)))
         rows.append(legs_row(label, r, attenuation, budget, sd_below(bound)))
+    groups = {}
     for genome in results.genomes.values():
         if genome.summary is not None:
             who = "our" if genome.settings == "ours" else "the authors'"
-            setting = f"ant, {who} genome, 64 types, seed {genome.training_seed}"
-            rows += [r for r in [variability_row(genome.summary.normal, setting)] if r]
-    return rows
+            setting = f"ant, {who} genome, 64 types"
+            row = variability_row(genome.summary.normal, f"{setting}, seed {genome.training_seed}")
+            if row is not None:
+                rows.append(row)
+                n, episodes = np.shape(genome.parts.normal.returns)
+                groups.setdefault((setting, n, episodes, None), []).append(row.test.estimate)
+    return rows + pooled_variability_rows("title.variability", groups)
 
 
 def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
@@ -740,9 +745,14 @@ def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
             found = _protocol_rows(label, actions, bodies, tests, budget)
             rows += [replace(r, amount=genome.trained_steps) for r in found]
             if found[-1].key == "title.variability.regime":
-                group = (genome.trained_steps, genome.cell_types, actions, n, episodes)
+                steps = genome.trained_steps
+                setting = (
+                    f"ant, the authors' regime, {regime_steps(steps)}, "
+                    f"{genome.cell_types} types, {actions}"
+                )
+                group = (setting, n, episodes, steps)
                 variability.setdefault(group, []).append(found[-1].test.estimate)
-    return rows + pooled_variability_rows(variability)
+    return rows + pooled_variability_rows("title.variability.regime", variability)
 
 
 def regime_steps(steps: int) -> str:
@@ -778,25 +788,21 @@ def _protocol_rows(
 
 
 def pooled_variability_rows(
-    groups: dict[tuple[int, int, str, int, int], list[float]],
+    key: str, groups: dict[tuple[str, int, int, int | None], list[float]]
 ) -> list[Row]:
-    """The title's claim per training, cell-type count and protocol over the regime's
-    genomes, the genome the unit: the mean of their SDs between individuals (% of the
-    return) with its one-sample t interval over genomes, against about 1 %. ``groups``:
-    (steps trained, cell types, actions, individuals, episodes) -> each genome's SD; a
-    group of one genome is left out."""
+    """The title's claim (``key``) per setting over its genomes, the genome the unit: the
+    mean of their SDs between individuals (% of the return) with its one-sample t
+    interval over genomes, against about 1 %. ``groups``: (setting, individuals,
+    episodes, steps the genomes trained or ``None``) -> each genome's SD; a group of one
+    genome is left out."""
     rows = []
-    for (steps, types, actions, n, episodes), sds in groups.items():
+    for (setting, n, episodes, steps), sds in groups.items():
         if len(sds) < 2:
             continue
-        setting = (
-            f"ant, the authors' regime, {regime_steps(steps)}, {types} types, {len(sds)} "
-            f"genomes pooled (the genome the unit), {actions}"
-        )
+        pooled = f"{setting}, {len(sds)} genomes pooled (the genome the unit)"
         budget = f"{len(sds)} genomes x {n} individuals x {episodes} episodes"
-        test = stats.one_sample(sds, 0.0)
-        row = judge("title.variability.regime", setting, test, budget, unit="genomes")
-        rows.append(replace(row, amount=steps))
+        row = judge(key, pooled, stats.one_sample(sds, 0.0), budget, unit="genomes")
+        rows.append(row if steps is None else replace(row, amount=steps))
     return rows
 
 
