@@ -716,14 +716,18 @@ def figure3_rows(
     settings_labels: dict[str, str] = FIG3_SETTINGS,
     key_infix: str = "",
     settings_of: Callable[[Training], str] = lambda r: r.settings,
+    on_authors_scale: Callable[[float], float] | None = None,
 ) -> list[Row]:
     """Figure 3C/D's level at 128 types and fall near 16, per genome settings named in
     ``settings_labels`` (``settings_of`` a run), as fractions of the mean vanilla return
     (each run scored by ``score``); keys ``fig3.level_128.{key_infix}{env}`` and
-    ``fig3.fall_16...``."""
+    ``fig3.fall_16...``. With ``on_authors_scale`` (a return to the authors' Figure 3
+    scale), the budget says where vanilla stands on it: how far the runs have learned."""
     vanilla = run_returns(runs, "ours", None, score, settings_of)
     scale = vanilla.mean() if vanilla.size else math.nan
     budget_of = f"{steps / 1e6:g}M steps, seeds: vanilla {vanilla.size}"
+    if on_authors_scale is not None and vanilla.size:
+        budget_of += f" (at {on_authors_scale(scale):.2f} of the authors' scale)"
     rows = []
     for settings in dict.fromkeys(settings_of(r) for r in runs if r.cell_types is not None):
         if settings not in settings_labels:

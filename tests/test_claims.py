@@ -50,6 +50,13 @@ def test_figure3_verdicts_on_sweeps_with_known_falls():
     assert verdict[(0.5, 10)] in verdicts.IN_DIRECTION
     assert verdict[(0.0, 40)] == verdicts.CONTRADICTED
     assert verdict[(0.3, 3)] in (verdicts.INCONCLUSIVE, verdicts.REPRODUCED)
+    # where vanilla stands on the authors' scale, in every row's budget
+    runs = _sweep(0.5, 10, rng)
+    vanilla = claims.run_returns(runs, "ours", None, "last_two_return").mean()
+    rows = claims.figure3_rows(runs, "ant", 2e6, on_authors_scale=lambda r: r / 8000)
+    assert {r.budget.split(", 128")[0] for r in rows} == {
+        f"2M steps, seeds: vanilla 10 (at {vanilla / 8000:.2f} of the authors' scale)"
+    }
 
 
 def test_a_fall_from_an_arm_near_the_floor_has_no_room_to_show_the_papers():

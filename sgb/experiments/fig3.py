@@ -6,6 +6,7 @@ agents as a fraction of the vanilla agent's. Writes the checkpoint of every run
 (``sgb.rl.runs``).
 """
 
+import functools
 from dataclasses import replace
 from pathlib import Path
 
@@ -251,7 +252,8 @@ def evidence(records: Records) -> list[Row]:
         if not _trained(payload.results):
             rows.append(untrained_row(env, steps))
             continue
-        rows += figure3_rows(payload.results.runs, env, steps)
+        on_scale = functools.partial(authors_scale, env)
+        rows += figure3_rows(payload.results.runs, env, steps, on_authors_scale=on_scale)
         if env == "ant":
             rows += typing_rows(payload.results.runs, steps)
     return rows

@@ -577,6 +577,13 @@ def _evaluate(recording: Recording, out_dir: Path) -> Path:
     return _write(recording, summarise(results, config))
 
 
+def _queued_name(genome: Genome, config: PopulationsConfig) -> str:
+    """E.g. ``64 types seed 0``, ``64 types seed 0 after 9.83 x 10^6 steps``."""
+    name = f"{genome.cell_types} types seed {genome.seed}"
+    steps = regime_steps(genome_steps(genome, config))
+    return name if genome.chunk is None else f"{name} after {steps}"
+
+
 def queued(profile: str, results_dir: Path) -> Queue:
     """The regime's genomes at ``profile`` under ``results_dir`` (``REGIME_PROFILES``), in
     the order they are evaluated, each one chunk a part, for the background queue
@@ -595,7 +602,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
         lock = genome_lock(path, genome)
         runs.append(
             QueuedRun(
-                label=f"{genome.cell_types} types seed {genome.seed}{waits}",
+                label=f"{_queued_name(genome, config)}{waits}",
                 checkpoint=lock,
                 state=lock.with_suffix(".state.npz"),  # none: its parts are in the file
                 chunks=len(genome.parts),

@@ -200,6 +200,7 @@ def regime_rows(runs: list["RegimeRun"], steps: int) -> list[Row]:
         REGIME_SETTINGS,
         key_infix="regime.",
         settings_of=lambda r: r.genome,
+        on_authors_scale=functools.partial(authors_scale, "ant"),
     )
 
 
