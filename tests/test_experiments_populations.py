@@ -3,6 +3,7 @@ variance, its pooling, and a smoke run end to end that resumes without evaluatin
 
 import json
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -312,9 +313,8 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
             "summary": populations.genome_summary(parts),
         }
     stored = json.loads(json.dumps(jsonable({"genomes": genomes})))
-    rows = population_runs.regime_population_rows(
-        populations.RegimePopulationsResults.model_validate(stored)
-    )
+    results = populations.RegimePopulationsResults.model_validate(stored)
+    rows = population_runs.regime_population_rows(results)
     fig5 = [r for r in rows if r.key == "fig5.population_beats_mean"]
     assert len(fig5) == 5  # paired, one-sample and Welch for seed 0; the last two for seed 1
     assert fig5[0].verdict in verdicts.IN_DIRECTION
@@ -331,5 +331,12 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     assert "2 genomes pooled" in pooled.setting and "sampled actions" in pooled.setting
     each = [r.test.estimate for r in variability[:3] if "sampled" in r.setting]
     assert pooled.test.estimate == pytest.approx(np.mean(each))
+    texts = population_runs.regime_populations(SimpleNamespace(results=results))
+    assert texts["regime_pop_design"] == (
+        "2 of the 13 genomes (64 types seed 0, 64 types seed 1), each 100 individuals x 64 episodes"
+    )
+    assert texts["regime_pop_legs"].count("**") == 2 * len(legs)
+    assert texts["regime_pop_welch"].count("; ") == 1  # one Welch row a genome
+    assert texts["regime_pop_retest"].startswith("64 types seed 0: r = ")
     texts = population_runs.regime_populations(None)
     assert set(texts.values()) == {population_runs.NOT_RUN}
