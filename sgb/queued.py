@@ -31,3 +31,17 @@ class Queue:
 
     results: Path
     runs: tuple[QueuedRun, ...]
+
+
+def run_lock(results: Path, name: str) -> Path:
+    """The path the lock of run ``name`` of the results file ``results`` is taken on, for
+    a run whose result goes into that file (a cell of a sweep, a genome's population)."""
+    return results.with_name(f"{results.stem}_{name}")
+
+
+def file_run(label: str, results: Path, name: str, record: dict | None) -> QueuedRun:
+    """A run of one chunk whose result is ``record`` (``None`` until it is written) in the
+    results file ``results``, locked at ``run_lock``."""
+    lock = run_lock(results, name)
+    wall = None if record is None else record["wall_time_s"]
+    return QueuedRun(label, lock, lock.with_suffix(".state.npz"), 1, record is not None, wall)

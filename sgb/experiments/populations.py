@@ -73,7 +73,7 @@ from sgb.claims import (
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import GENOMES, NOT_RUN, REGIME_STEPS, Card, regime_setting, row_of, row_texts
 from sgb.provenance import git_commit, read_results, results_file
-from sgb.queued import Queue, QueuedRun
+from sgb.queued import Queue, QueuedRun, run_lock
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
@@ -512,12 +512,6 @@ def genome_steps(genome: Genome, config: PopulationsConfig) -> int | None:
     )
 
 
-def genome_lock(results: Path, genome: Genome, env: str = "ant") -> Path:
-    """The path the lock of ``genome``'s evaluation into the results file ``results`` is
-    taken on (held while its parts are evaluated)."""
-    return results.with_name(f"{results.stem}_{genome_label(genome, env)}")
-
-
 def evaluate(recording: Recording, out_dir: Path) -> Path:
     """Evaluate every part of ``recording.config`` that its results file does not hold yet
     (checkpoints under ``out_dir``, else the committed ones), writing the file after each
@@ -559,7 +553,7 @@ def _evaluate(recording: Recording, out_dir: Path) -> Path:
         print(f"{name} {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
         if label not in agents:
             agents = {label: genome_agent(genome, config, out_dir)}
-        with runlock.exclusive(genome_lock(path, genome, env)):
+        with runlock.exclusive(run_lock(path, label)):  # held while its parts are evaluated
             tic = time.perf_counter()
             returns = evaluate_part(agents[label], part, config, config.seed + j)
             wall = time.perf_counter() - tic
@@ -599,7 +593,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
         waits = (
             "" if landed(genome, config, Path(results_dir)) else " (its training has not landed)"
         )
-        lock = genome_lock(path, genome)
+        lock = run_lock(path, label)
         runs.append(
             QueuedRun(
                 label=f"{_queued_name(genome, config)}{waits}",

@@ -48,7 +48,7 @@ from sgb.data import Dataset, load
 from sgb.profiles import check_profile
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import read_results, results_file
-from sgb.queued import Queue, QueuedRun
+from sgb.queued import Queue, file_run, run_lock
 from sgb.recording import Recording, start
 from sgb.results import Records
 from sgb.schemas import (
@@ -163,11 +163,6 @@ def layer_sizes(full: FullSGBSweep, data: Dataset) -> tuple[int, ...]:
     return dense_sizes(data.x_train.shape[1:], sweep.conv_features, sweep.hidden, data.num_classes)
 
 
-def cell_lock(path: Path, name: str) -> Path:
-    """The path the lock of cell ``name`` of the results file ``path`` is taken on."""
-    return path.with_name(f"{path.stem}_{name}")
-
-
 def train(recording: Recording, progress: bool = True) -> Path:
     """Train every cell of ``recording.config`` (a ``FullSGBSweep``) that no other process
     holds and no run has finished, adding each to its results file as it finishes."""
@@ -199,7 +194,7 @@ def train(recording: Recording, progress: bool = True) -> Path:
         write,
         path.stem,
         progress,
-        shared=(lambda item: cell_lock(path, name(*item)), held),
+        shared=(lambda item: run_lock(path, name(*item)), held),
     )
 
 
@@ -218,10 +213,8 @@ def queued_high(profile: str, results_dir: Path) -> Queue:
     runs = []
     for variant, (_, setting, seed) in _cells(full, sizes):
         name = cell_name(variant, setting, seed)
-        lock = cell_lock(path, name)
-        wall = done[name]["wall_time_s"] if name in done else None
         label = f"{setting} hidden type{'s' if setting > 1 else ''} seed {seed}"
-        runs.append(QueuedRun(label, lock, lock.with_suffix(".state.npz"), 1, name in done, wall))
+        runs.append(file_run(label, path, name, done.get(name)))
     return Queue(path, tuple(runs))
 
 

@@ -30,7 +30,7 @@ from sgb.dgb import DGBConfig
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card, row_texts
 from sgb.provenance import read_results, results_file
-from sgb.queued import Queue, QueuedRun
+from sgb.queued import Queue, file_run, run_lock
 from sgb.recording import start
 from sgb.results import Records
 from sgb.schemas import Accuracy, Compression, Count, List, Record, ResultsFile, Seed
@@ -136,7 +136,7 @@ def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
         path.stem,
         progress,
         shared=(
-            lambda item: path.with_name(f"{path.stem}_{_key(item[0], item[1][0], item[1][2])}"),
+            lambda item: run_lock(path, _key(item[0], item[1][0], item[1][2])),
             held,
         ),
     )
@@ -154,10 +154,8 @@ def queued(profile: str, results_dir: Path) -> Queue:
     runs = []
     for width, (model, _, seed) in _cells(config, data.x_train.shape[1:], data.num_classes):
         key = _key(width, model, seed)
-        lock = path.with_name(f"{path.stem}_{key}")
-        wall = done[key]["wall_time_s"] if key in done else None
         label = f"{model.upper()} width {width} seed {seed}"
-        runs.append(QueuedRun(label, lock, lock.with_suffix(".state.npz"), 1, key in done, wall))
+        runs.append(file_run(label, path, key, done.get(key)))
     return Queue(path, tuple(runs))
 
 
