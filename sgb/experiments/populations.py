@@ -79,7 +79,7 @@ from sgb.reliability import between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
 from sgb.rl import regime_runs
 from sgb.rl.population import population_returns
-from sgb.rl.ppo import state_agent
+from sgb.rl.ppo import PPOConfig, state_agent
 from sgb.rl.protocols import load_agent
 from sgb.rl.regimes import SETTINGS
 from sgb.rl.runs import checkpoint_name, checkpoint_root, finished_run, kept_state
@@ -476,28 +476,35 @@ def run_regime(profile: str, out_dir: Path) -> Path:
     return evaluate(start(REGIME_PROFILES, profile, rl_dir, "regime_populations_ant"), out_dir)
 
 
+def _checkpoint_file(genome: Genome, config: PopulationsConfig, out_dir: Path, env: str) -> Path:
+    """``genome``'s checkpoint under ``out_dir``, else the committed one."""
+    checkpoint = checkpoint_path(genome, config, env)
+    return checkpoint_root(out_dir, checkpoint) / checkpoint
+
+
+def _regime_ppo(genome: Genome, config: PopulationsConfig) -> PPOConfig:
+    """The settings of the regime run that trained ``genome``."""
+    run = regime_runs.RegimeRun(genome.cell_types, genome.seed)
+    return regime_runs.run_config(regime_runs.RUNS[config.source], run)
+
+
 def landed(genome: Genome, config: PopulationsConfig, out_dir: Path, env: str = "ant") -> bool:
     """Whether ``genome``'s checkpoint (under ``out_dir``, else the committed one) holds its
     finished training: for a regime genome, a run of the regime as it now trains
     (``sgb.rl.regime_runs.run_config``), not an earlier one under its name."""
-    checkpoint = checkpoint_path(genome, config, env)
-    path = checkpoint_root(out_dir, checkpoint) / checkpoint
+    path = _checkpoint_file(genome, config, out_dir, env)
     if not genome.regime or genome.chunk is not None:
         return path.exists()  # a kept state says which run it is of when it is read
-    runs = regime_runs.RUNS[config.source]
-    run = regime_runs.RegimeRun(genome.cell_types, genome.seed)
-    return finished_run(path, regime_runs.run_config(runs, run)) is not None
+    return finished_run(path, _regime_ppo(genome, config)) is not None
 
 
 def genome_agent(genome: Genome, config: PopulationsConfig, out_dir: Path) -> tuple:
     """(PPO settings, actor parameters, normalizer) of ``genome``: from its checkpoint, or
     for a genome part-way (``Genome.chunk``) from the state its regime run kept."""
-    checkpoint = checkpoint_path(genome, config)
-    path = checkpoint_root(out_dir, checkpoint) / checkpoint
+    path = _checkpoint_file(genome, config, out_dir, "ant")
     if genome.chunk is None:
         return load_agent(path)
-    runs = regime_runs.RUNS[config.source]
-    ppo = regime_runs.run_config(runs, regime_runs.RegimeRun(genome.cell_types, genome.seed))
+    ppo = _regime_ppo(genome, config)
     return (ppo, *state_agent(path, ppo, genome.seed))
 
 
@@ -571,13 +578,6 @@ def _evaluate(recording: Recording, out_dir: Path) -> Path:
     return _write(recording, summarise(results, config))
 
 
-def _queued_name(genome: Genome, config: PopulationsConfig) -> str:
-    """E.g. ``64 types seed 0``, ``64 types seed 0 after 9.83 x 10^6 steps``."""
-    name = f"{genome.cell_types} types seed {genome.seed}"
-    steps = regime_steps(genome_steps(genome, config))
-    return name if genome.chunk is None else f"{name} after {steps}"
-
-
 def queued(profile: str, results_dir: Path) -> Queue:
     """The regime's genomes at ``profile`` under ``results_dir`` (``REGIME_PROFILES``), in
     the order they are evaluated, each one chunk a part, for the background queue
@@ -587,7 +587,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
     genomes = read_results(path)["results"]["genomes"] if path.exists() else {}
     runs = []
     for genome in config.genomes:
-        label = genome_label(genome)
+        label, steps = genome_label(genome), genome_steps(genome, config)
         parts = genomes.get(label, {}).get("parts", {})
         done = [parts[p] for p in genome.parts if p in parts]
         waits = (
@@ -596,7 +596,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
         lock = run_lock(path, label)
         runs.append(
             QueuedRun(
-                label=f"{_queued_name(genome, config)}{waits}",
+                label=f"{_genome_name(genome.cell_types, genome.seed, steps)}{waits}",
                 checkpoint=lock,
                 state=lock.with_suffix(".state.npz"),  # none: its parts are in the file
                 chunks=len(genome.parts),
@@ -827,11 +827,11 @@ def _listed(rows: list[Row], key: str) -> str:
     return "; ".join(f"{regime_setting(r)}: {r.ours}, **{r.verdict}**" for r in found) or NOT_RUN
 
 
-def _genome_name(genome: "RegimePopulationGenome") -> str:
-    """E.g. ``128 types seed 0``, ``64 types seed 0 after 9.83 x 10^6 steps``."""
-    name = f"{genome.cell_types} types seed {genome.training_seed}"
-    steps = regime_steps(genome.trained_steps)
-    return name if steps == REGIME_STEPS else f"{name} after {steps}"
+def _genome_name(cell_types: int, seed: int, steps: int) -> str:
+    """A regime genome in the chapter and the queue: e.g. ``128 types seed 0``, ``64 types
+    seed 0 after 9.83 x 10^6 steps``."""
+    name, trained = f"{cell_types} types seed {seed}", regime_steps(steps)
+    return name if trained == REGIME_STEPS else f"{name} after {trained}"
 
 
 def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
@@ -847,14 +847,17 @@ def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     if rows:
         genomes = payload.results.genomes
         done = {k: g for k, g in genomes.items() if g.summary is not None}
-        names = ", ".join(_genome_name(g) for g in done.values())
+        names = ", ".join(
+            _genome_name(g.cell_types, g.training_seed, g.trained_steps) for g in done.values()
+        )
         budget = next(r.budget for r in rows if r.budget.startswith("1 genome"))
         texts["regime_pop_design"] = (
             f"{len(done)} of the {len(REGIME_PROFILES['cpu'].genomes)} genomes ({names}), "
             f"each {budget.removeprefix('1 genome x ')}"
         )
         texts["regime_pop_retest"] = "; ".join(
-            f"{_genome_name(g)}: r = {split.r:.2f} [{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}]"
+            f"{_genome_name(g.cell_types, g.training_seed, g.trained_steps)}: "
+            f"r = {split.r:.2f} [{split.r_ci[0]:.2f}, {split.r_ci[1]:.2f}]"
             for g in done.values()
             for split in [g.summary.authors_protocol.normal.split_half]
         )
