@@ -126,17 +126,19 @@ def workers(tree: Path) -> dict[int, int]:
     return found
 
 
-def _git(*args: str, cwd: Path = REPOSITORY) -> str:
-    done = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True)
+def _git(*args: str, cwd: Path | None = None) -> str:
+    """Run git in ``cwd`` (default: this checkout); its output, a ``RuntimeError`` if it fails."""
+    done = subprocess.run(["git", *args], cwd=cwd or REPOSITORY, capture_output=True, text=True)
     if done.returncode:
         raise RuntimeError(f"git {' '.join(args)} failed: {done.stderr.strip()}")
     return done.stdout.strip()
 
 
-def prepare(tree: Path) -> None:
+def prepare(tree: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> None:
     """Make ``tree`` a worktree of this checkout's HEAD, refusing where that would lose
-    work: while its workers run, while this checkout's results differ from HEAD, or
-    while ``tree`` holds work not landed here (which is landed first, to be committed)."""
+    work: while its workers run, while this checkout's results differ from HEAD, while
+    ``tree`` holds work of ``queue`` not landed here (which is landed first, to be
+    committed), or while ``tree`` is a folder other than a worktree that holds files."""
     if workers(tree):
         raise RuntimeError(f"workers are running in {tree}: python -m sgb grid status")
     if _git("status", "--porcelain", "--", "results"):
@@ -145,14 +147,22 @@ def prepare(tree: Path) -> None:
             "so that the workers start from what the repository holds"
         )
     if tree.exists():
-        landed = land(tree / "results", REPOSITORY / "results")
+        landed = land(tree / "results", REPOSITORY / "results", queue)
         if landed.runs or landed.results:
             raise RuntimeError(
                 f"landed {len(landed.runs) + len(landed.results)} files the last workers left "
                 f"in {tree}; enter its results files (python -m sgb grid land) and commit them "
                 "(git add results && git commit), then start again"
             )
-        _git("worktree", "remove", "--force", str(tree))
+        if (tree / ".git").exists():
+            _git("worktree", "remove", "--force", str(tree))
+        elif any(path.is_file() for path in tree.rglob("*")):
+            raise RuntimeError(
+                f"{tree} is not a worktree of this checkout and holds files: move it away, "
+                f"or set ${GRID_ENV} to another place"
+            )
+        else:
+            shutil.rmtree(tree)  # folders only, such as a fresh clone's empty results/
     _git("worktree", "prune")
     _git("worktree", "add", "--detach", str(tree), "HEAD")
 
@@ -331,6 +341,8 @@ def main(argv: list[str], reproduce: Callable[[list[str]], int]) -> int:
             for name, profile, queue in queues(root):
                 print(f"{name} --profile {profile} ({queue.results.name}):")
                 print("\n".join(describe(queue)))
+        elif not tree.exists():
+            print(f"no worktree at {tree}: no workers have run here, nothing to land")
         else:
             landed = land(tree / "results", REPOSITORY / "results")
             entered = add(landed.results, gather.model_of) if landed.results else []

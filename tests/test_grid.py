@@ -143,3 +143,33 @@ def test_landing_skips_a_file_the_workers_left_as_their_checkout_committed_it(tm
     assert not grid._copy(stale, here) and here.read_text() == '{"newer": 2}\n'
     stale.write_text('{"written by a worker": 3}\n')
     assert grid._copy(stale, here) and here.read_text() == stale.read_text()
+
+
+def test_a_folder_left_where_the_worktree_goes_gives_way_unless_it_holds_files(
+    tmp_path, monkeypatch
+):
+    """The workers' worktree replaces a folder of empty folders (such as a fresh clone's
+    listing leaves), and is refused where the folder holds a file that is not a worktree's."""
+    repository = tmp_path / "repository"
+    (repository / "results").mkdir(parents=True)
+    (repository / "results" / "sweep.json").write_text('{"committed": 1}\n')
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t", "-C", str(repository)]
+    subprocess.run([*git, "init", "-q"], check=True)
+    subprocess.run([*git, "add", "."], check=True)
+    subprocess.run([*git, "commit", "-qm", "results"], check=True)
+    monkeypatch.setattr(grid, "REPOSITORY", repository)
+
+    tree = tmp_path / "tree"
+    (tree / "results" / "rl").mkdir(parents=True)
+    grid.prepare(tree, SMOKE)
+    assert (tree / ".git").is_file()
+    assert (tree / "results" / "sweep.json").read_text() == '{"committed": 1}\n'
+    grid.prepare(tree, SMOKE)  # a worktree already: made anew
+    assert (tree / "results" / "sweep.json").exists()
+
+    other = tmp_path / "other"
+    (other / "results").mkdir(parents=True)
+    (other / "notes.txt").write_text("mine\n")
+    with pytest.raises(RuntimeError, match="not a worktree"):
+        grid.prepare(other, SMOKE)
+    assert (other / "notes.txt").read_text() == "mine\n"
