@@ -14,6 +14,9 @@ among them would. Two scores of a population:
   less from generation to generation can grow faster at a lower average;
 - its *survival*: a member survives a generation if its return reaches ``threshold``; the
   probability that at least k of the N survive is the share of generations in which they do.
+  A survivor *retested* must also reach it on a second episode from a new initial state
+  (``retest``, the same shape): one survival can be an episode's luck, two in a row on
+  independent states measure the member's ability.
 """
 
 import numpy as np
@@ -45,13 +48,21 @@ def geometric_mean_fitness(returns, scale: float) -> float:
     return float(np.exp(np.log(w).mean()))
 
 
-def survivors(returns, threshold: float) -> np.ndarray:
-    """How many members reach ``threshold`` in each generation, shape (C * E,)."""
+def survivors(returns, threshold: float, retest=None) -> np.ndarray:
+    """How many members reach ``threshold`` in each generation, shape (C * E,); with
+    ``retest`` (C, N, E), those who reach it in both ``returns`` and ``retest``."""
     r = _returns(returns)
-    return (r >= validation.real("threshold", threshold)).sum(axis=1).reshape(-1)
+    passed = r >= validation.real("threshold", threshold)
+    if retest is not None:
+        again = _returns(retest)
+        if again.shape != r.shape:
+            raise ValueError(f"retest must have the shape of returns {r.shape}, got {again.shape}")
+        passed &= again >= threshold
+    return passed.sum(axis=1).reshape(-1)
 
 
-def p_at_least(returns, threshold: float, k: int) -> float:
-    """The share of generations in which at least ``k`` members reach ``threshold``."""
+def p_at_least(returns, threshold: float, k: int, retest=None) -> float:
+    """The share of generations in which at least ``k`` members reach ``threshold`` (with
+    ``retest``, in both episodes: ``survivors``)."""
     validation.integer("k", k)
-    return float((survivors(returns, threshold) >= k).mean())
+    return float((survivors(returns, threshold, retest) >= k).mean())

@@ -46,6 +46,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("ch6.evolution_stochastic_helps",),
     ("ch6.hedging_geometric",),
     ("ch6.hedging_survival",),
+    ("ch6.hedging_lineage",),
     ("ch6.innate_start_rl",),
     ("ch6.innate_start_supervised",),
 )

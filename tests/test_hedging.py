@@ -52,3 +52,21 @@ def test_bad_inputs_fail_with_names():
         hedging.survivors(np.zeros((3, 4)), 1.0)
     with pytest.raises(ValueError, match="scale"):
         hedging.generation_fitness(np.ones((1, 2, 2)), 0.0)
+
+
+def test_a_retest_keeps_survivors_by_ability_and_thins_survivors_by_luck_to_p_squared():
+    """Two populations of 2,000 whose members each pass a generation's episode 30 % of the
+    time: by ability (the same 600 members always) or by luck (each episode anew). Both
+    count about 600 survivors; retested on a second episode, the able keep all 600 and the
+    lucky keep N p^2 = 180 on average (its SE over 400 generations is 0.64)."""
+    rng = np.random.default_rng(1)
+    n, generations, p = 2000, 400, 0.3
+    able = np.where(np.arange(n) < p * n, 1.0, 0.0)[None, :, None]
+    able = np.broadcast_to(able, (1, n, generations))
+    lucky, lucky_again = (rng.random((2, 1, n, generations)) < p).astype(float)
+    assert np.all(hedging.survivors(able, 1.0, retest=able) == p * n)
+    assert abs(hedging.survivors(lucky, 1.0).mean() - p * n) < 5
+    assert abs(hedging.survivors(lucky, 1.0, retest=lucky_again).mean() - n * p**2) < 5
+    assert hedging.p_at_least(lucky, 1.0, 250, retest=lucky_again) == 0.0
+    with pytest.raises(ValueError, match="retest must have the shape"):
+        hedging.survivors(lucky, 1.0, retest=lucky[:, :10])

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from sgb.experiments import rl_spread
-from sgb.experiments.bet_hedging import HedgingGenome
+from sgb.experiments.bet_hedging import BetHedgingResults, HedgingGenome
 from sgb.experiments.theory import FixedPoint
 from sgb.plots import (
     COLUMN_IN,
@@ -165,7 +165,13 @@ FIXED = [
 ]
 RETURNS = {"normal": {k: RNG.normal(size=(20, 3)) for k in ("individuals", "mean_network")}}
 CONDITIONS = ("normal", "long_legs", "slippery", "low_gravity")
-SCORE = {"geometric_fitness": 1.0, "mean_fitness": 1.0, "p_at_least": {"0.5": {"10": 0.5}}}
+P_SURVIVE = {"0.5": {"1": 0.9, "10": 0.5, "50": 0.1}}
+SCORE = {
+    "geometric_fitness": 1.0,
+    "mean_fitness": 1.0,
+    "p_at_least": P_SURVIVE,
+    "p_retested": P_SURVIVE,
+}
 GENOME = HedgingGenome.model_validate(
     {
         "returns": {
@@ -177,6 +183,16 @@ GENOME = HedgingGenome.model_validate(
         "sigma_trained": 0.1,
         "scale": 1e3,
         "scores": {"individuals": SCORE, "clones": SCORE},
+    }
+)
+LINEAGE = GENOME.model_dump() | {"rho_init": -30.0, "sigma_trained": 1e-13}
+LINEAGE["returns"]["clones"] = LINEAGE["scores"]["clones"] = None
+HEDGING = BetHedgingResults.model_validate(
+    {
+        "genomes": [
+            *(GENOME.model_dump() | {"training_seed": s} for s in range(3)),
+            *(LINEAGE | {"training_seed": s} for s in range(3)),
+        ]
     }
 )
 FRAMES = {name: np.zeros((40, 60, 3)) for name in ("normal", "long legs", "slippery")}
@@ -192,6 +208,7 @@ FIGURES = {
     },
     "theory.fixed_point": lambda: theory.fixed_point(FIXED),
     "beyond.plot_condition_returns": lambda: beyond.plot_condition_returns(GENOME),
+    "beyond.plot_hedging": lambda: beyond.plot_hedging(HEDGING),
     "rl.plot_spread": lambda: rl.plot_spread(SPREAD),
     "rl.plot_backends": lambda: rl.plot_backends(BENCH),
     "rl.plot_mean_network": lambda: rl.plot_mean_network(

@@ -39,8 +39,6 @@ def _delete(path: tuple):
 FIG5 = "rl/fig5_ant_cpu.json"
 RETURNS = ("results", "returns", "normal", "individuals")
 SUPERVISED = "innate_start_supervised_fashion-mnist_cpu.json"
-HEDGING = "rl/bet_hedging_ant_cpu.json"
-P_AT_LEAST = ("results", "genomes", 0, "scores", "individuals", "p_at_least")
 
 
 @pytest.mark.parametrize(
@@ -67,11 +65,6 @@ P_AT_LEAST = ("results", "genomes", 0, "scores", "individuals", "p_at_least")
             SUPERVISED,
             _set(("results", "summary", 0, "accuracy", 0), 1.5),
             r"summary\[0\]\.accuracy\[0\] = 1\.5: Input should be less than or equal to 1",
-        ),
-        (
-            HEDGING,
-            _delete((*P_AT_LEAST, "0.5")),
-            r"results\.genomes\[0\]\.scores\.individuals\.p_at_least: no key '0\.5'",
         ),
         ("rl/fig3_ant_cpu.json", _set(("results", "runs", 0, "cell_types"), "64"), "cell_types"),
     ],

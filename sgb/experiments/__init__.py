@@ -295,16 +295,18 @@ EXPERIMENTS: dict[str, Experiment] = {
         "bet_hedging",
         chapter=6,
         figure="bet-hedging: a genome's individuals against clones of its mean "
-        "network in a world that changes among four conditions (the abstract's 'at least "
-        "some individuals will survive')",
-        inputs="the Ant on normal, long legs, slippery and low gravity; the spread sweep's "
-        "64-type checkpoints (rho -5, -3, -1.5; the committed cpu ones at smoke and cpu)",
+        "network and against a deterministic lineage, in a world that changes among four "
+        "conditions (the abstract's 'at least some individuals will survive')",
+        inputs="the Ant on normal, long legs, slippery and low gravity; 64-type genomes "
+        "trained with Figure 3's PPO from rho -5 (Figure 3's own at seeds 0-4) and -3 (the "
+        "spread sweep's at seeds 0-2), and the sigma = 0 lineage (rho -30), trained if missing",
         costs={
-            "smoke": "2 genomes, 50 members x 2 episodes of 50 steps; about 2 CPU-minutes, "
-            "most of it compiling",
-            "cpu": "9 genomes x 4M env-steps, about 40 min of one CPU core; resumable",
-            "paper": "15 genomes of the spread sweep's paper checkpoints, 16 episodes; not "
-            "measured",
+            "smoke": "2 genomes trained at smoke, 50 members x 2 + 2 episodes of 50 steps; "
+            "about 3 CPU-minutes, most of it compiling",
+            "cpu": "45 genomes (37 to train, about 5 CPU-minutes each) x 8M env-steps "
+            "(4M for the lineage), about 8 hours of one CPU core; resumable, shared by "
+            "the background queue's workers",
+            "paper": "the same genomes trained at paper, 16 + 16 episodes; not measured",
         },
         results={"": "rl/bet_hedging_ant_cpu.json"},
         record_name="BetHedging",

@@ -1,26 +1,36 @@
 """Bet-hedging (chapter 6, registered as ``bet_hedging``): do a genome's varied individuals
-survive a changing world better than clones of its mean network?
+survive a changing world better than clones of its mean network, and better than a
+deterministic lineage?
 
 The paper's abstract: variability "can increase the probability that at least some
-individuals will survive in rapidly changing, unpredictable environments". Here each
-trained 64-type Ant genome of the spread sweep (``sgb.experiments.rl_spread``: initial
-spreads rho = -5, -3 and -1.5, seeds 0 to 2) fields two populations of N members on the
-four conditions of ``sgb.rl.envs`` (normal, long legs, slippery, low gravity): its
-individuals, and N clones of its mean network. Member i plays the same E initial states in
-both populations (``sgb.rl.population.population_returns`` with one seed per genome), so
-the clones differ only by their initial states. Actions are deterministic.
+individuals will survive in rapidly changing, unpredictable environments". The test is
+declared before its runs (``PRIMARY``): a member survives a generation if its return
+reaches half of its mean network's mean return on the normal body, and what counts is the
+chance that *at least one* of the 100 survives (the abstract's "at least some"), with
+"at least 10" and "at least 50" as secondary rows. A survivor is retested: it must reach
+the threshold again on an episode from a new initial state (``sgb.hedging``), so that what
+survives is ability, not an episode's luck.
 
-Each genome's record keeps every return, (N, E) per population and condition, and its
-scores (``sgb.hedging``): the geometric-mean fitness of each population over the 4 x E
-generations (fitness in units of the mean network's mean return on the normal body) and
-the probability that at least k of the N survive, a member surviving if its return reaches
-a share q of that same return, for every k of ``KS`` and q of ``QS``.
+The genomes are 64-type Ant genomes trained with Figure 3's PPO settings (the spread
+sweep's, ``sgb.experiments.rl_spread``) at two initial spreads, rho = -5 (Figure 3's) and
+-3, 15 training seeds each, and a deterministic lineage: the same architecture trained
+from rho = ``DETERMINISTIC_RHO``, whose sigma (about 1e-13) lies below float32's
+resolution of its weights, so that its individuals play as its mean network does. A
+genome not trained yet is trained first (kept as a checkpoint beside the spread sweep's).
 
-Cost: 2 x 4 x N x E x 1000 env-steps a genome, 4M at ``cpu`` (N = 100, E = 5): about
-4 CPU-minutes at the 17,000 env-steps per CPU-second of ``population_returns`` on the Ant
-(``sgb.experiments.populations``), 36 for the 9 genomes, plus about 25 CPU-seconds to
-compile each of the 8 programs (4 conditions x 2 populations). A finished genome is kept
-in the results file, written after every genome, and not evaluated again on a rerun.
+Each stochastic genome fields two populations of N members on the four conditions of
+``sgb.rl.envs`` (normal, long legs, slippery, low gravity): its individuals, and N clones
+of its mean network; the lineage fields its own N members. Member i plays the same 2E
+initial states in every population of a genome (``sgb.rl.population.population_returns``,
+one seed per genome): the first E choose the survivors, the last E retest them. Actions
+are deterministic.
+
+Cost at ``cpu`` (N = 100, E = 5 + 5): 2 x 4 x N x 2E x 1000 = 8M env-steps a stochastic
+genome, about 8 CPU-minutes at the 17,000 env-steps per CPU-second of
+``population_returns`` on the Ant, half that for a lineage genome, and about 5 CPU-minutes
+to train one; 45 genomes, 37 of them to train, about 8 CPU-hours in all. A finished
+genome is kept in the results file, written after every genome under a lock, so several
+processes share the work (``sgb.grid``).
 """
 
 import time
@@ -31,43 +41,51 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from sgb import claims, hedging, stats, validation
+from sgb import claims, hedging, runlock, stats, validation
 from sgb.claims import CLAIMS, Row, judge, untestable
 from sgb.genome import mean_sigma
+from sgb.paths import committed_results
 from sgb.profiles import PROFILE_NAMES, check_profile
-from sgb.prose import NOT_RUN, Card, row_of, row_texts
-from sgb.provenance import git_commit
+from sgb.prose import NOT_RUN, Card, row_texts
+from sgb.provenance import git_commit, results_file
+from sgb.queued import Queue, QueuedRun
 from sgb.recording import Recording, start
-from sgb.results import Records
+from sgb.results import Records, read_results
+from sgb.resume import peek
 from sgb.rl.envs import VARIANTS
 from sgb.rl.population import population_returns
+from sgb.rl.ppo import PPOConfig
 from sgb.rl.protocols import load_agent
-from sgb.rl.runs import checkpoint_name, checkpoint_root
+from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, finished_run, trained_run
+from sgb.rl.sweep import ant_genome_ppo
 from sgb.schemas import (
     Each,
     Finite,
-    List,
+    MaybeEmpty,
     NonNegative,
     Probability,
     Record,
     ResultsFile,
     Return,
     Returns,
+    Seconds,
     Seed,
 )
 
+DETERMINISTIC_RHO = -30.0  # sigma = softplus(-30) = 9.4e-14: the deterministic lineage
 POPULATIONS = ("individuals", "clones")
 QS = (0.25, 0.5, 0.75)  # survival thresholds, shares of the mean network's normal return
 KS = (1, 10, 50)  # "at least k survive"
-DECIMALS = 3
+PRIMARY = ("0.5", "1")  # declared before the runs: half the home return, at least one
+DECIMALS = 1
 
 
 @dataclass(frozen=True)
 class HedgingConfig:
-    """Which genomes (64-type checkpoints of the spread sweep at ``source``, by initial
-    rho and training seed, each listed once), and how many members, episodes and steps;
-    genome j draws its individuals and initial states with seed ``seed + j``, a seed of
-    ``sgb.validation.seed`` for every j."""
+    """Which genomes (64-type Ant genomes trained with the spread sweep's PPO at
+    ``source``, by initial rho, ``DETERMINISTIC_RHO`` for the deterministic lineage, and
+    training seed), and how many members, selection episodes (as many again retest) and
+    steps; genome j draws its individuals and initial states with seed ``seed + j``."""
 
     rho_inits: tuple[float, ...]
     seeds: tuple[int, ...]
@@ -91,137 +109,257 @@ class HedgingConfig:
         validation.choice("source", self.source, PROFILE_NAMES)
 
     def genomes(self) -> list[tuple[float, int]]:
-        """Every (rho_init, training seed), spread by spread."""
-        return [(rho, seed) for rho in self.rho_inits for seed in self.seeds]
+        """Every (rho_init, training seed), seed by seed, so that every spread grows alike
+        while the genomes land."""
+        return [(rho, seed) for seed in self.seeds for rho in self.rho_inits]
+
+    def ppo(self, rho_init: float) -> PPOConfig:
+        """The training settings of a genome: the spread sweep's at ``source``."""
+        return ant_genome_ppo(self.source, rho_init)
 
     def checkpoint(self, rho_init: float, seed: int) -> str:
         return checkpoint_name("ant", 64, seed, self.source, rho_init=rho_init)
 
 
-def scores(individuals: np.ndarray, clones: np.ndarray, scale: float) -> dict[str, Any]:
-    """Both populations' scores from their returns (C, N, E) and the fitness ``scale``: the
-    geometric-mean fitness, the arithmetic mean of the generations' fitness, and
-    ``p_at_least[q][k]`` for every q of ``QS`` and k of ``KS``."""
-    out: dict[str, Any] = {}
-    for name, returns in zip(POPULATIONS, (individuals, clones), strict=True):
-        out[name] = {
-            "geometric_fitness": hedging.geometric_mean_fitness(returns, scale),
-            "mean_fitness": float(hedging.generation_fitness(returns, scale).mean()),
-            "p_at_least": {
-                str(q): {str(k): hedging.p_at_least(returns, q * scale, k) for k in KS} for q in QS
-            },
-        }
-    return out
+def genome_label(rho_init: float, seed: int) -> str:
+    """A genome's name in the progress and the queue: ``rho -3 seed 7``, ``sigma 0 seed 7``."""
+    spread = "sigma 0" if rho_init == DETERMINISTIC_RHO else f"rho {rho_init:g}"
+    return f"{spread} seed {seed}"
 
 
-def run_genome(config: HedgingConfig, rho_init: float, seed: int, j: int, out_dir: Path) -> dict:
-    """Both populations of one genome on every condition; its record."""
+def checkpoint_file(config: HedgingConfig, rho_init: float, seed: int, out_dir: Path) -> Path:
+    """A genome's checkpoint: the committed one where it is committed and ``out_dir`` has
+    none, else under ``out_dir`` (where it is trained if missing)."""
+    relative = Path(CHECKPOINT_DIR) / config.checkpoint(rho_init, seed)
+    here, committed = Path(out_dir) / relative, committed_results() / relative
+    return committed if committed.exists() and not here.exists() else here
+
+
+def population_scores(returns: np.ndarray, scale: float, episodes: int) -> dict[str, Any]:
+    """One population's scores from its returns (C, N, 2E), the first ``episodes`` of each
+    member choosing and the rest retesting: the geometric-mean and arithmetic-mean fitness
+    over the C x E selection generations, and ``p_at_least`` and ``p_retested`` (survivors
+    who survive again) for every q of ``QS`` and k of ``KS``."""
+    chosen, retest = returns[..., :episodes], returns[..., episodes:]
+    return {
+        "geometric_fitness": hedging.geometric_mean_fitness(chosen, scale),
+        "mean_fitness": float(hedging.generation_fitness(chosen, scale).mean()),
+        "p_at_least": {
+            str(q): {str(k): hedging.p_at_least(chosen, q * scale, k) for k in KS} for q in QS
+        },
+        "p_retested": {
+            str(q): {str(k): hedging.p_at_least(chosen, q * scale, k, retest) for k in KS}
+            for q in QS
+        },
+    }
+
+
+def run_genome(
+    config: HedgingConfig, rho_init: float, seed: int, j: int, checkpoint: Path
+) -> dict[str, Any]:
+    """Every population of one trained genome on every condition; its record. The scale is
+    the mean network's mean return on the normal body over the selection episodes (the
+    lineage's own members')."""
     began = time.perf_counter()
-    name = config.checkpoint(rho_init, seed)
-    path = checkpoint_root(out_dir, f"rl/checkpoints/{name}") / "rl" / "checkpoints" / name
-    ppo, actor, normalizer = load_agent(path)
-    returns = {population: {} for population in POPULATIONS}
+    ppo, actor, normalizer = load_agent(checkpoint)
+    deterministic = rho_init == DETERMINISTIC_RHO
+    populations = POPULATIONS[:1] if deterministic else POPULATIONS
+    returns: dict[str, dict[str, np.ndarray]] = {p: {} for p in populations}
     for variant in VARIANTS:
-        common = (
-            replace(ppo.env, variant=variant),
-            ppo.network,
-            actor,
-            normalizer,
-            config.n_individuals,
-            config.episodes,
-            config.episode_length,
-            config.seed + j,
-        )
-        for population in POPULATIONS:
-            r = population_returns(*common, mean_network=population == "clones")
-            returns[population][variant] = np.round(r, DECIMALS)
-    scale = float(returns["clones"]["normal"].mean())
-    stacked = {p: np.stack([returns[p][v] for v in VARIANTS]) for p in POPULATIONS}
+        for population in populations:
+            r = population_returns(
+                replace(ppo.env, variant=variant),
+                ppo.network,
+                actor,
+                normalizer,
+                config.n_individuals,
+                2 * config.episodes,
+                config.episode_length,
+                config.seed + j,
+                mean_network=population == "clones",
+            )
+            returns[population][variant] = np.round(np.asarray(r, np.float64), DECIMALS)
+    home = populations[-1]  # the clones, or the lineage's members
+    scale = round(float(returns[home]["normal"][:, : config.episodes].mean()), DECIMALS + 2)
     return {
         "rho_init": rho_init,
         "training_seed": seed,
         "evaluation_seed": config.seed + j,
-        "checkpoint": name,
+        "checkpoint": checkpoint.name,
         "sigma_trained": mean_sigma(actor),
+        "training_wall_time_s": finished_run(checkpoint, ppo)["wall_time_s"],
         "scale": scale,
-        "returns": {p: {v: r.tolist() for v, r in returns[p].items()} for p in POPULATIONS},
-        "scores": scores(stacked["individuals"], stacked["clones"], scale),
+        "returns": {p: {v: r.tolist() for v, r in returns[p].items()} for p in populations},
+        "scores": {
+            p: population_scores(np.stack(list(returns[p].values())), scale, config.episodes)
+            for p in populations
+        },
         "git_commit": git_commit(),
-        "wall_time_s": round(time.perf_counter() - began, 2),
+        "wall_time_s": round(time.perf_counter() - began, 2),  # the evaluation's
     }
 
 
 def run(profile: str, out_dir: Path) -> Path:
-    """Evaluate every genome of ``profile`` not yet in its results file, writing the file
-    with provenance after each."""
+    """Train and evaluate every genome of ``profile`` not yet in its results file, one
+    process per genome (``sgb.runlock``, on its checkpoint's path under ``out_dir``),
+    writing the file after each; returns its path."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "bet_hedging_ant")
-    config = recording.config
-    records = list(recording.earlier().get("genomes", []))
-    done = {(r["rho_init"], r["training_seed"]) for r in records}
-    for j, (rho, seed) in enumerate(config.genomes()):
-        if (rho, seed) in done:
-            continue
-        print(f"bet_hedging ({profile}): genome rho_init={rho:g} seed {seed}", flush=True)
-        records.append(run_genome(config, rho, seed, j, Path(out_dir)))
-        _write(recording, records)
-    if not recording.path.exists():
-        _write(recording, records)
-    return recording.path
+    config, path = recording.config, recording.path
+    plan = config.genomes()
+    for j, (rho, seed) in enumerate(plan):
+        label = f"bet_hedging {genome_label(rho, seed)} ({j + 1}/{len(plan)})"
+        lock = Path(out_dir) / CHECKPOINT_DIR / config.checkpoint(rho, seed)  # the queue's
+        with runlock.claim(lock) as mine:
+            if not mine:
+                print(f"{label}: another process has it", flush=True)
+                continue
+            if _recorded(recording, rho, seed):
+                continue
+            checkpoint = checkpoint_file(config, rho, seed, Path(out_dir))
+            trained_run(config.ppo(rho), seed, checkpoint, recording.profile, label)
+            print(f"{label}: evaluating, {_eta(recording, len(plan) - j)}", flush=True)
+            record = run_genome(config, rho, seed, j, checkpoint)
+            with runlock.exclusive(path):
+                records = [*recording.earlier().get("genomes", []), record]
+                _write(recording, records)
+    with runlock.exclusive(path):
+        return _write(recording, list(recording.earlier().get("genomes", [])))
+
+
+def _recorded(recording: Recording, rho: float, seed: int) -> bool:
+    genomes = recording.earlier().get("genomes", [])
+    return any(g["rho_init"] == rho and g["training_seed"] == seed for g in genomes)
+
+
+def _eta(recording: Recording, left: int) -> str:
+    """The time ``left`` more genomes take at the evaluations' mean so far (not counting
+    their training)."""
+    walls = [g["wall_time_s"] for g in recording.earlier().get("genomes", [])]
+    if not walls:
+        return "ETA unknown until the first genome ends"
+    return f"about {left * np.mean(walls) / 60:.0f} min of evaluation left ({left} genomes)"
 
 
 def _write(recording: Recording, records: list[dict]) -> Path:
-    results = {"env": "ant", "conditions": list(VARIANTS), "genomes": records}
+    """The results file with ``records`` in the config's order, and whether all are in."""
+    order = {genome: j for j, genome in enumerate(recording.config.genomes())}
+    records = sorted(records, key=lambda g: order[(g["rho_init"], g["training_seed"])])
+    results = {
+        "env": "ant",
+        "conditions": list(VARIANTS),
+        "selection_episodes": recording.config.episodes,
+        "genomes": records,
+        "complete": len(records) == len(order),
+    }
     return recording.write(results, recording.config.seeds, parts=records)
 
 
+def queued(profile: str, results_dir: Path) -> Queue:
+    """The genomes of ``profile`` under ``results_dir`` in the order they run, for the
+    background queue (``sgb.grid``): each one's training chunks, then its evaluation as a
+    last chunk; a genome trained here keeps its checkpoint, landed as it appears."""
+    config = PROFILES[check_profile(profile)]
+    path = results_file(Path(results_dir) / "rl", "bet_hedging_ant", profile)
+    genomes = read_results(path)["results"]["genomes"] if path.exists() else []
+    records = {(g["rho_init"], g["training_seed"]): g for g in genomes}
+    runs = []
+    for rho, seed in config.genomes():
+        checkpoint = Path(results_dir) / CHECKPOINT_DIR / config.checkpoint(rho, seed)
+        state = checkpoint.with_suffix(".state.npz")
+        chunks = config.ppo(rho).num_evals
+        trained = checkpoint_file(config, rho, seed, Path(results_dir)).exists()
+        progress = peek(state)[1] if not trained and state.exists() else {}
+        record = records.get((rho, seed))
+        runs.append(
+            QueuedRun(
+                label=genome_label(rho, seed),
+                checkpoint=checkpoint,
+                state=state,
+                chunks=chunks + 1,
+                finished=record is not None,
+                wall_time_s=None if record is None else record["wall_time_s"],
+                chunks_done=chunks if trained else progress.get("chunks", 0),
+                spent_s=progress.get("wall_time_s", 0.0),
+                kept=(checkpoint, checkpoint.with_suffix(".json")),
+            )
+        )
+    return Queue(path, tuple(runs))
+
+
 def hedging_config(profile: str) -> HedgingConfig:
-    """The design at ``profile``: at ``smoke`` the seed-0 genomes of the narrowest and
-    widest spreads, N = 50 members (the largest k), 2 episodes of 50 steps; at ``cpu`` 9
-    genomes, N = 100, E = 5 episodes of 1000 steps; at ``paper`` 5 seeds, E = 16."""
+    """The design at ``profile``: at ``smoke`` one seed at rho = -5 and one of the lineage,
+    trained at smoke, N = 50 members (the largest k), 2 + 2 episodes of 50 steps; at
+    ``cpu`` rho = -5, -3 and the lineage at 15 seeds each, N = 100, E = 5 + 5 episodes of
+    1000 steps; at ``paper`` the same genomes trained at paper, E = 16 + 16."""
     check_profile(profile)
+    spreads = (-5.0, -3.0, DETERMINISTIC_RHO)
     if profile == "smoke":
         return HedgingConfig(
-            (-5.0, -1.5), (0,), n_individuals=max(KS), episodes=2, episode_length=50
+            (-5.0, DETERMINISTIC_RHO),
+            (0,),
+            n_individuals=max(KS),
+            episodes=2,
+            episode_length=50,
+            source="smoke",
         )
     if profile == "cpu":
-        return HedgingConfig((-5.0, -3.0, -1.5), (0, 1, 2))
-    return HedgingConfig((-5.0, -3.0, -1.5), (0, 1, 2, 3, 4), episodes=16, source="paper")
+        return HedgingConfig(spreads, tuple(range(15)))
+    return HedgingConfig(spreads, tuple(range(15)), episodes=16, source="paper")
 
 
 PROFILES = {p: hedging_config(p) for p in PROFILE_NAMES}
 
 
-HEDGING_Q = "0.5"  # survival: a return of half the mean network's on the normal body
-
-
-HEDGING_K = "10"  # at least 10 of the 100 members
+def _setting(rho: float, genomes: list, q: str, k: str) -> str:
+    sigma = np.mean([g.sigma_trained for g in genomes])
+    role = "declared in advance" if (q, k) == PRIMARY else "secondary"
+    return f"rho from {rho:g} (trained sigma {sigma:.2g}), at least {k} survive ({role})"
 
 
 def bet_hedging_rows(results: "BetHedgingResults") -> list[Row]:
-    """Bet-hedging (``sgb.experiments.bet_hedging``): per initial spread, the genomes'
-    individuals against clones of their mean networks on the four conditions, by
-    geometric-mean fitness and by the chance that at least ``HEDGING_K`` of them survive
-    (a return of ``HEDGING_Q`` of the mean network's on the normal body); a one-sample t
-    over the genomes of their differences."""
+    """Bet-hedging (``sgb.experiments.bet_hedging``), per initial spread with two genomes or
+    more: the chance that at least k retested individuals survive, against clones of
+    their mean networks (a one-sample t over the genomes of their differences) for every
+    k of ``KS``, the declared one first; the geometric-mean fitness, likewise; and the
+    declared survival against the deterministic lineage's members (Welch over genomes)."""
+    q, k = PRIMARY
+    lineage = [g for g in results.genomes if g.rho_init == DETERMINISTIC_RHO]
     rows = []
     for rho in dict.fromkeys(g.rho_init for g in results.genomes):
         genomes = [g for g in results.genomes if g.rho_init == rho]
-        if len(genomes) < 2:
+        if rho == DETERMINISTIC_RHO or len(genomes) < 2:
             continue
-        scores = [g.scores for g in genomes]
-        sigma = np.mean([g.sigma_trained for g in genomes])
-        setting = f"rho from {rho:g} (trained sigma {sigma:.2g})"
         n, e = np.shape(genomes[0].returns.individuals["normal"])
-        budget = f"{len(genomes)} genomes, {n} members x {e} episodes x 4 conditions"
-        geometric = [s.individuals.geometric_fitness - s.clones.geometric_fitness for s in scores]
-        rows.append(_across_genomes("ch6.hedging_geometric", setting, geometric, budget))
-        survival = [
-            s.individuals.p_at_least[HEDGING_Q][HEDGING_K]
-            - s.clones.p_at_least[HEDGING_Q][HEDGING_K]
-            for s in scores
+        episodes = f"({e // 2} + {e // 2} retest) episodes"
+        budget = f"{len(genomes)} genomes, {n} members x {episodes} x 4 conditions"
+        for each in (k, *(str(other) for other in KS if str(other) != k)):
+            survival = [
+                g.scores.individuals.p_retested[q][each] - g.scores.clones.p_retested[q][each]
+                for g in genomes
+            ]
+            setting = _setting(rho, genomes, q, each)
+            rows.append(_across_genomes("ch6.hedging_survival", setting, survival, budget))
+        geometric = [
+            g.scores.individuals.geometric_fitness - g.scores.clones.geometric_fitness
+            for g in genomes
         ]
-        rows.append(_across_genomes("ch6.hedging_survival", setting, survival, budget))
+        setting = _setting(rho, genomes, q, k).split(", at least")[0]
+        rows.append(_across_genomes("ch6.hedging_geometric", setting, geometric, budget))
+        if len(lineage) >= 2:
+            ours = [g.scores.individuals.p_retested[q][k] for g in genomes]
+            theirs = [g.scores.individuals.p_retested[q][k] for g in lineage]
+            lineage_budget = f"{budget}; the lineage {len(lineage)} genomes"
+            rows.append(_lineage_row(_setting(rho, genomes, q, k), ours, theirs, lineage_budget))
     return rows
+
+
+def _lineage_row(setting: str, ours: list[float], theirs: list[float], budget: str) -> Row:
+    """Individuals against the deterministic lineage by Welch's t; not testable where no
+    genome of either differs from the rest."""
+    if np.ptp(ours) == 0 and np.ptp(theirs) == 0:
+        reason = f"every genome gives {ours[0]:.2f} against {theirs[0]:.2f}: no spread to test"
+        return _untestable("ch6.hedging_lineage", setting, reason, budget)
+    return judge("ch6.hedging_lineage", setting, stats.welch(ours, theirs), budget)
 
 
 def _across_genomes(key: str, setting: str, differences, budget: str) -> Row:
@@ -230,56 +368,84 @@ def _across_genomes(key: str, setting: str, differences, budget: str) -> Row:
     never, had enough survivors)."""
     if np.ptp(differences) == 0:
         reason = f"every genome gives the same difference, {differences[0]:+.2f}: no spread to test"
-        claim = CLAIMS[key]
-        return replace(
-            untestable(key, reason),
-            setting=setting,
-            paper_effect=claim.paper_effect,
-            basis=claim.basis,
-            budget=budget,
-        )
+        return _untestable(key, setting, reason, budget)
     return judge(key, setting, stats.one_sample(differences, 0.0), budget)
 
 
+def _untestable(key: str, setting: str, reason: str, budget: str) -> Row:
+    claim = CLAIMS[key]
+    return replace(
+        untestable(key, reason),
+        setting=setting,
+        paper_effect=claim.paper_effect,
+        basis=claim.basis,
+        budget=budget,
+    )
+
+
+SPREAD_NAMES = {-5.0: "narrow", -3.0: "middle"}
+
+
 def bet_hedging(payload: "BetHedging | None") -> dict[str, str]:
-    """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``) and, per
-    initial spread j (0 the narrowest: rho from -5, -3, -1.5), its trained sigma
-    (``hedge{j}_sigma``), both populations' mean return over conditions, members and
-    genomes (``hedge{j}_returns``) and the rows of ``bet_hedging_rows``:
-    geometric-mean fitness (``hedge{j}_geometric_*``) and survival
-    (``hedge{j}_survival_*``); ``NOT_RUN`` for all without the file."""
-    texts = {"hedge_design": NOT_RUN}
-    for j in range(3):
-        texts[f"hedge{j}_sigma"] = texts[f"hedge{j}_returns"] = NOT_RUN
-        texts |= row_texts(f"hedge{j}_geometric", None) | row_texts(f"hedge{j}_survival", None)
+    """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``), the
+    lineage's sigma and home return (``hedge_lineage``) and, per stochastic spread
+    (``narrow``: rho from -5; ``middle``: -3), its trained sigma (``hedge_{name}_sigma``),
+    its populations' mean returns over conditions, members and genomes
+    (``hedge_{name}_returns``) and its rows: declared survival (``hedge_{name}_survival``),
+    at least 10 and 50 (``hedge_{name}_k10``, ``hedge_{name}_k50``), geometric fitness
+    (``hedge_{name}_geometric``), against the lineage (``hedge_{name}_lineage``);
+    ``NOT_RUN`` for all without the file, or where too few genomes have landed."""
+    texts = {"hedge_design": NOT_RUN, "hedge_lineage": NOT_RUN}
+    rows = ("survival", "k10", "k50", "geometric", "lineage")
+    for name in SPREAD_NAMES.values():
+        texts[f"hedge_{name}_sigma"] = texts[f"hedge_{name}_returns"] = NOT_RUN
+        for row in rows:
+            texts |= row_texts(f"hedge_{name}_{row}", None)
     if payload is None:
         return texts
     genomes = payload.results.genomes
+    lineage = [g for g in genomes if g.rho_init == DETERMINISTIC_RHO]
+    if lineage:
+        sigma = np.mean([g.sigma_trained for g in lineage])
+        texts["hedge_lineage"] = (
+            f"{len(lineage)} genomes, trained sigma {sigma:.1e}, "
+            f"home return {np.mean([g.scale for g in lineage]):.0f}"
+        )
     card = claims.by_key(bet_hedging_rows(payload.results))
-    for j, rho in enumerate(dict.fromkeys(g.rho_init for g in genomes)):
+    keys = {
+        "survival": ("ch6.hedging_survival", f"at least {PRIMARY[1]} survive"),
+        "k10": ("ch6.hedging_survival", "at least 10 survive"),
+        "k50": ("ch6.hedging_survival", "at least 50 survive"),
+        "geometric": ("ch6.hedging_geometric", ""),
+        "lineage": ("ch6.hedging_lineage", ""),
+    }
+    for rho, name in SPREAD_NAMES.items():
         group = [g for g in genomes if g.rho_init == rho]
-        texts[f"hedge{j}_sigma"] = f"{np.mean([g.sigma_trained for g in group]):.2g}"
-        populations = {
-            "individuals": [g.returns.individuals for g in group],
-            "clones": [g.returns.clones for g in group],
-        }
+        if not group:
+            continue
+        texts[f"hedge_{name}_sigma"] = f"{np.mean([g.sigma_trained for g in group]):.2g}"
         mean_return = {
-            p: np.mean([np.mean(list(r.values())) for r in returns])
-            for p, returns in populations.items()
+            p: np.mean([np.mean(list(getattr(g.returns, p).values())) for g in group])
+            for p in POPULATIONS
         }
-        texts[f"hedge{j}_returns"] = (
+        texts[f"hedge_{name}_returns"] = (
             f"{mean_return['individuals']:.0f} for the individuals, "
             f"{mean_return['clones']:.0f} for the clones"
         )
-        for kind in ("geometric", "survival"):
-            row = row_of(card, f"ch6.hedging_{kind}", f"rho from {rho:g} ")
-            texts |= row_texts(f"hedge{j}_{kind}", row)
-            texts["hedge_design"] = NOT_RUN if row is None else row.budget
+        for row, (key, part) in keys.items():
+            found = [
+                r
+                for r in card.get(key, [])
+                if r.setting.startswith(f"rho from {rho:g} ") and part in r.setting
+            ]
+            texts |= row_texts(f"hedge_{name}_{row}", found[0] if found else None)
+            if found and row == "survival":
+                texts["hedge_design"] = found[0].budget
     return texts
 
 
 def evidence(records: Records) -> list[Row]:
-    """Individuals against clones of the mean network (``bet_hedging_rows``)."""
+    """Individuals against clones of the mean network and the lineage (``bet_hedging_rows``)."""
     payload = records.get("bet_hedging")
     return [] if payload is None else bet_hedging_rows(payload.results)
 
@@ -289,61 +455,62 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return bet_hedging(records.get("bet_hedging"))
 
 
-def hedging_table(payload: "BetHedging", q: str = "0.5") -> pd.DataFrame:
+def hedging_table(payload: "BetHedging", q: str = PRIMARY[0]) -> pd.DataFrame:
     """Bet-hedging (``sgb.experiments.bet_hedging``), one row per genome and population:
     the trained sigma, the fitness scale (the mean network's mean return at home), the
-    geometric and arithmetic mean fitness, and P(at least k survive) at threshold ``q``
-    for every k."""
+    geometric mean fitness, and at threshold ``q`` for every k the chance that at least k
+    survive and that at least k survive their retest."""
     rows = []
     for g in payload.results.genomes:
-        for population, score in (
-            ("individuals", g.scores.individuals),
-            ("clones", g.scores.clones),
-        ):
+        lineage = g.rho_init == DETERMINISTIC_RHO
+        for population in POPULATIONS[:1] if lineage else POPULATIONS:
+            score = getattr(g.scores, population)
             rows.append(
                 {
                     "rho start": g.rho_init,
                     "seed": g.training_seed,
                     "sigma trained": g.sigma_trained,
-                    "population": population,
+                    "population": "lineage" if lineage else population,
                     "home return": g.scale,
                     "geometric fitness": score.geometric_fitness,
-                    "mean fitness": score.mean_fitness,
                     **{f"P(>= {k} survive)": p for k, p in score.p_at_least[q].items()},
+                    **{f"P(>= {k} retested)": p for k, p in score.p_retested[q].items()},
                 }
             )
     return pd.DataFrame(rows)
 
 
 class HedgingScore(Record):
-    """The survival the scorecard reads: threshold 0.5, at least 10 members."""
+    """The survival the scorecard reads: threshold 0.5, at least 1, 10 and 50 members."""
 
     geometric_fitness: Finite
     mean_fitness: Finite
-    p_at_least: Each(Each(Probability, "10"), "0.5")
+    p_at_least: Each(Each(Probability, "1", "10", "50"), "0.5")
+    p_retested: Each(Each(Probability, "1", "10", "50"), "0.5")
 
 
 class HedgingReturns(Record):
     individuals: Each(Returns, "normal")
-    clones: Each(Returns, "normal")
+    clones: Each(Returns, "normal") | None = None
 
 
 class HedgingScores(Record):
     individuals: HedgingScore
-    clones: HedgingScore
+    clones: HedgingScore | None = None
 
 
 class HedgingGenome(Record):
     rho_init: Finite
     training_seed: Seed
     sigma_trained: NonNegative
+    training_wall_time_s: Seconds | None = None
     scale: Return
     returns: HedgingReturns
     scores: HedgingScores
 
 
 class BetHedgingResults(Record):
-    genomes: List[HedgingGenome]
+    genomes: MaybeEmpty[HedgingGenome]
 
 
 class BetHedging(ResultsFile):

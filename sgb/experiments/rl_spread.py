@@ -19,7 +19,6 @@ from sgb.profiles import check_profile
 from sgb.prose import Card
 from sgb.recording import start
 from sgb.results import Records
-from sgb.rl.agent import NetworkConfig
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.protocols import (
     PopulationConfig,
@@ -29,7 +28,7 @@ from sgb.rl.protocols import (
     population_on,
 )
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_name, seed_sem, trained_run
-from sgb.rl.sweep import sweep_config
+from sgb.rl.sweep import ant_genome_ppo
 from sgb.schemas import (
     Count,
     Finite,
@@ -57,7 +56,7 @@ class SpreadConfig:
 def spread_config(profile: str) -> SpreadConfig:
     """The spread sweep at ``profile``: Figure 3's Ant PPO with 64 cell types."""
     check_profile(profile)
-    ppo = replace(sweep_config("ant", profile).ppo, network=NetworkConfig(cell_types=64))
+    ppo = ant_genome_ppo(profile)
     population = replace(population_config(profile), conditions=("normal",))
     if profile == "smoke":
         return SpreadConfig((-5.0, -2.0), (0,), ppo, population)

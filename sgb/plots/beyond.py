@@ -63,34 +63,43 @@ def plot_evolution(results: Record, axes: Sequence[Axes] | None = None) -> list:
 
 
 def plot_hedging(
-    results: Record, q: str = "0.5", k: str = "10", axes: Sequence[Axes] | None = None
+    results: Record, q: str = "0.5", k: str = "1", axes: Sequence[Axes] | None = None
 ) -> list:
-    """``results``: a ``BetHedgingResults`` record. Two panels, bars per initial spread: the
-    geometric-mean fitness of the individuals and of the clones (the mean network at home =
-    1), and the chance that at least ``k`` members survive (a return of ``q`` of the mean
-    network's at home); means over the spread's genomes with SEM error bars, each genome a
+    """``results``: a ``BetHedgingResults`` record. Two panels, bars per initial spread and
+    one for the deterministic lineage: the geometric-mean fitness of the individuals, of
+    the clones and of the lineage's members (the mean network at home = 1), and the chance
+    that at least ``k`` members survive and survive their retest (a return of ``q`` of the
+    mean network's at home, twice); means over genomes with SEM error bars, each genome a
     dot. Returns the axes."""
     fitness, survival = axes_or_new(axes, 1, 2, figsize=(WIDTH, 3.6))
     genomes = results.genomes
     spreads = list(dict.fromkeys(g.rho_init for g in genomes))
     width = 0.8 / len(_POPULATIONS)
-    for i, (population, color) in enumerate(_POPULATIONS):
-        for j, rho in enumerate(spreads):
-            scores = [g.scores for g in genomes if g.rho_init == rho]
-            group = [s.individuals if population == "individuals" else s.clones for s in scores]
-            x, label = j + (i - 0.5) * width, population if j == 0 else None
-            _bar(fitness, x, [s.geometric_fitness for s in group], width, color, label)
-            _bar(survival, x, [s.p_at_least[q][k] for s in group], width, color, label)
-    sigma = {
-        rho: np.mean([g.sigma_trained for g in genomes if g.rho_init == rho]) for rho in spreads
-    }
-    labels = [f"$\\rho$ from {rho:g}\n($\\sigma$ {sigma[rho]:.2g})" for rho in spreads]
+    labels = []
+    for j, rho in enumerate(spreads):
+        group = [g for g in genomes if g.rho_init == rho]
+        sigma = np.mean([g.sigma_trained for g in group])
+        lineage = all(g.scores.clones is None for g in group)  # no clones: one network
+        labels.append(
+            f"lineage\n($\\sigma$ {sigma:.0e})"
+            if lineage
+            else f"$\\rho$ from {rho:g}\n($\\sigma$ {sigma:.2g})"
+        )
+        bars = [("lineage", "#555555")] if lineage else _POPULATIONS
+        for i, (population, color) in enumerate(bars):
+            scores = [getattr(g.scores, "individuals" if lineage else population) for g in group]
+            x = j if lineage else j + (i - 0.5) * width
+            label = population if j == 0 or lineage else None
+            _bar(fitness, x, [s.geometric_fitness for s in scores], width, color, label)
+            _bar(survival, x, [s.p_retested[q][k] for s in scores], width, color, label)
     for ax in (fitness, survival):
         ax.set_xticks(range(len(spreads)), labels)
         ax.legend(fontsize=8)
     fitness.set_ylabel("geometric-mean fitness")
     fitness.axhline(1.0, color="k", lw=0.6, ls=":")
-    survival.set_ylabel(f"P(at least {k} survive)\nreturn $\\geq$ {q} x the mean network's at home")
+    survival.set_ylabel(
+        f"P(at least {k} survive, retested)\nreturn $\\geq$ {q} x the mean network's at home"
+    )
     survival.set_ylim(0, 1.05)
     return [fitness, survival]
 
@@ -110,7 +119,7 @@ def plot_condition_returns(genome: Record, ax: Axes | None = None) -> Axes:
     rows = [
         {"condition": condition.replace("_", " "), "population": population, "return": value}
         for population, _ in _POPULATIONS
-        for condition, returns in populations[population].items()
+        for condition, returns in (populations[population] or {}).items()
         for value in np.mean(returns, axis=1)
     ]
     frame = pd.DataFrame(rows)

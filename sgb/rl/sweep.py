@@ -5,6 +5,7 @@ from dataclasses import dataclass, replace
 
 from sgb import validation
 from sgb.profiles import check_profile
+from sgb.rl.agent import NetworkConfig
 from sgb.rl.envs import EnvSpec
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regimes import ABLATIONS, SETTINGS
@@ -102,3 +103,10 @@ def sweep_config(env: str, profile: str) -> CellTypeSweep:
     ]
     points += [SweepPoint(name, types[-1], few) for name in ablations]
     return CellTypeSweep(tuple(points), ppo_settings(env, profile))
+
+
+def ant_genome_ppo(profile: str, rho_init: float = NetworkConfig.rho_init) -> PPOConfig:
+    """Figure 3's Ant PPO at ``profile`` for an SGB of 64 cell types from the initial
+    spread ``rho_init``: the spread sweep's genomes and chapter 6's."""
+    ppo = sweep_config("ant", profile).ppo
+    return replace(ppo, network=NetworkConfig(cell_types=64, rho_init=rho_init))
