@@ -42,6 +42,21 @@ class Dataset(NamedTuple):
     num_classes: int
 
 
+def of_classes(data: Dataset, classes) -> Dataset:
+    """The examples of ``data``, train and test, whose label is one of ``classes``; the
+    labels and ``num_classes`` unchanged."""
+    keep = np.asarray(validation.integers("classes", tuple(classes), minimum=0))
+    if keep.max() >= data.num_classes:
+        raise ValueError(f"classes must lie in [0, {data.num_classes}), got {tuple(classes)}")
+    train, test = np.isin(data.y_train, keep), np.isin(data.y_test, keep)
+    return data._replace(
+        x_train=data.x_train[train],
+        y_train=data.y_train[train],
+        x_test=data.x_test[test],
+        y_test=data.y_test[test],
+    )
+
+
 def check_dataset(data: Dataset) -> Dataset:
     """``data`` if it can be trained and evaluated on: non-empty, finite ``x_train`` and
     ``x_test`` of one shape per example, as many int labels in [0, num_classes) as

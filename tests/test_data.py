@@ -214,3 +214,18 @@ def test_installed_fashion_mnist_passes_its_checks():
     ds = data.load("fashion-mnist")
     assert ds.x_train.shape == (60_000, 784) and ds.x_test.shape == (10_000, 784)
     np.testing.assert_array_equal(ds.y_train[:10], [9, 0, 0, 3, 0, 2, 7, 2, 5, 5])
+
+
+def test_of_classes_keeps_exactly_the_examples_of_the_classes_asked():
+    digits = data.load("digits")
+    low = data.of_classes(digits, (0, 1, 2, 3, 4))
+    high = data.of_classes(digits, range(5, 10))
+    for split in ("train", "test"):
+        y = getattr(digits, f"y_{split}")
+        kept, rest = getattr(low, f"y_{split}"), getattr(high, f"y_{split}")
+        assert set(kept) == {0, 1, 2, 3, 4} and set(rest) == {5, 6, 7, 8, 9}
+        assert len(kept) + len(rest) == len(y) == len(getattr(digits, f"x_{split}"))
+    np.testing.assert_array_equal(low.x_train, digits.x_train[digits.y_train < 5])
+    assert low.num_classes == 10
+    with pytest.raises(ValueError, match="classes must lie in"):
+        data.of_classes(digits, (3, 10))

@@ -36,27 +36,30 @@ def test_innate_start_rows_find_a_head_start_and_rule_out_none():
     )
     assert mean.setting == "g, from its mean network"
     assert random.verdict == verdicts.CONTRADICTED and "random" in random.setting
-    starts = (("individual", 0.6, 0.8), ("mean", 0.4, 0.8), ("fresh", 0.1, 0.8))
+    # on the new task: a head start at 50 steps (15 and 10 points), none at 100
+    starts = (("individual", 0.0, 0.75, 0.8), ("mean", 0.0, 0.7, 0.8), ("fresh", 0.1, 0.6, 0.8))
+
+    twin_rng = np.random.default_rng(8)
 
     def runs() -> list[dict]:
-        noise = 0.01 * rng.standard_normal(len(starts))  # each network's own end
+        noise = 0.005 * twin_rng.standard_normal((len(starts), 2))  # each network's own curve
         return [
-            {"start": s, "steps": [0, 50, 100], "accuracy": [a0, a, a + e]}
-            for (s, a0, a), e in zip(starts, noise, strict=True)
+            {"start": s, "steps": [0, 50, 100], "accuracy": [a0, a + e50, b + e100]}
+            for (s, a0, a, b), (e50, e100) in zip(starts, noise, strict=True)
         ]
 
-    records = [{"runs": runs()} for _ in range(4)]
-    twin = {"dataset": "digits", "records": records}
+    records = [{"runs": runs()} for _ in range(6)]
+    twin = {"dataset": "digits", "genome_classes": [0, 1, 2, 3, 4], "records": records}
     twin["summary"] = innate_start_supervised.summarise(records)
     twin = innate_start_supervised.InnateStartSupervisedResults.model_validate(twin)
     rows = {r.setting: r for r in innate_start_supervised.innate_supervised_rows(twin)}
-    # the head start counts over the epoch (a quarter of it: 12.5 and 7.5 points), not after
-    area = rows["digits, from individual, over the epoch"].test
-    assert area.estimate == pytest.approx(12.5, abs=0.5)
-    assert rows["digits, from mean, over the epoch"].test.estimate == pytest.approx(7.5, abs=0.5)
-    # 7.5 points, measured to within a point or so, against a stand-in of 1 point
-    assert rows["digits, from mean, over the epoch"].verdict == verdicts.LARGER
-    assert rows["digits, from individual, after one epoch"].verdict == verdicts.CONTRADICTED
+    task = "digits classes 5-9 (genome on 0-4)"
+    assert len(rows) == 4  # two budgets past the start, two starts
+    early = rows[f"{task}, from individual, after 50 steps"].test
+    assert early.estimate == pytest.approx(15, abs=1.5)
+    # 10 points, measured to within a point or so, against a stand-in of 1 point
+    assert rows[f"{task}, from mean, after 50 steps"].verdict == verdicts.LARGER
+    assert rows[f"{task}, from individual, after 100 steps"].verdict == verdicts.CONTRADICTED
 
 
 def test_innate_start_tables_name_every_start_with_no_list_cells():

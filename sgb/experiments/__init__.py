@@ -348,13 +348,14 @@ EXPERIMENTS: dict[str, Experiment] = {
     "innate_start_supervised": Experiment(
         "innate_start_supervised",
         chapter=6,
-        figure="innate start then learning, supervised: 10 SGB individuals, their "
-        "mean network and 10 fresh networks, each fine-tuned for one epoch as a plain MLP",
-        inputs="Fashion-MNIST (digits at smoke); Fig. 2's cpu SGB at 10x, 3 seeds",
+        figure="innate start then learning a new task, supervised: an SGB trained on five "
+        "classes; its 10 individuals, its mean network (their hidden layers, a fresh output "
+        "layer each) and 10 fresh networks learn the other five as plain MLPs",
+        inputs="Fashion-MNIST (digits at smoke), classes 0-4 then 5-9; Fig. 2's cpu SGB at "
+        "10x, 5 seeds",
         costs={
-            "smoke": f"16 CPU-seconds (22 s {_SHARED})",
-            "cpu": "3 seeds, about 2 minutes of one CPU core each (estimated from one epoch of "
-            "each training); resumable",
+            "smoke": "about 20 CPU-seconds",
+            "cpu": "5 seeds, about a minute of one CPU core each; resumable",
             "paper": "the cpu design on Fig. 2's paper SGB (50 epochs), 5 seeds; not measured",
         },
         results={"": "innate_start_supervised_fashion-mnist_cpu.json"},

@@ -71,7 +71,7 @@ from pydantic import ConfigDict, Field
 from sgb import stats, validation
 from sgb.claims import Row, judge
 from sgb.profiles import PROFILE_NAMES, check_profile
-from sgb.prose import NOT_RUN, Card, mean_sem, row_of, row_texts
+from sgb.prose import NOT_RUN, Card, mean_sem
 from sgb.provenance import git_commit
 from sgb.recording import Recording, start
 from sgb.results import Records
@@ -425,11 +425,11 @@ def innate_start(
     """Innate start, then learning: what of it is committed (``innate_status``); on the
     Ant, each genome's and start's gain in learning-curve area over the fresh network
     (``innate_rl_rows``: estimate, interval and verdict of ``innate_start_rows``);
-    the supervised twin's (an ``innate_start_supervised.InnateStartSupervised`` record)
-    rows of ``card`` (``innate_sup_{individual,mean}_{area,end}_*``:
-    over the epoch and after it)."""
+    the supervised twin's (an ``innate_start_supervised.InnateStartSupervised`` record):
+    its new task (``innate_sup_task``) and its rows of ``card``, each budget's gain of a
+    start over the fresh networks (``innate_sup_rows``)."""
     parts = []
-    texts = {"innate_rl_rows": NOT_RUN}
+    texts = {"innate_rl_rows": NOT_RUN, "innate_sup_task": NOT_RUN, "innate_sup_rows": NOT_RUN}
     if ant is None:
         parts.append(f"the Ant runs {NOT_RUN}")
     else:
@@ -450,13 +450,15 @@ def innate_start(
             for r in summary
         )
         parts.append(
-            f"the supervised twin on {summary[0].n_seeds} seeds, test accuracy after one "
-            f"epoch: {after}"
+            f"the supervised twin on {summary[0].n_seeds} seeds, test accuracy on the new "
+            f"task after {summary[0].steps[-1]} steps: {after}"
         )
-    for origin in ("individual", "mean"):
-        for measure, name in (("over the epoch", "area"), ("after one epoch", "end")):
-            row = row_of(card, "ch6.innate_start_supervised", f"from {origin}, {measure}")
-            texts |= row_texts(f"innate_sup_{origin}_{name}", row)
+        rows = card.get("ch6.innate_start_supervised", [])
+        if rows:
+            texts["innate_sup_task"] = rows[0].setting.split(", from ")[0]
+            texts["innate_sup_rows"] = "; ".join(
+                f"{r.setting.split(', ', 1)[1]}: {r.ours}, **{r.verdict}**" for r in rows
+            )
     return texts | {"innate_status": "; ".join(parts)}
 
 

@@ -146,7 +146,8 @@ def plot_finetune_curves(summary: Sequence[Record], ax: Axes | None = None) -> A
         ax.plot(steps, mean, "o-", color=color, label=f"from {row.start}")
         band = 100 * np.asarray([np.nan if s is None else s for s in row.accuracy_sem])
         ax.fill_between(steps, mean - band, mean + band, color=color, alpha=0.2)
-    ax.set_xlabel("fine-tuning steps (one epoch)")
+    ax.set_xlabel("steps of learning the new task")
+    ax.set_xscale("symlog", linthresh=10)
     ax.set_ylabel("test accuracy (%)")
     ax.legend(fontsize=8)
     return ax
