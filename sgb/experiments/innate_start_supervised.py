@@ -79,7 +79,7 @@ class SupervisedStartConfig:
     ratio: float = 10.0
     seeds: tuple[int, ...] = (0, 1, 2, 3, 4)
     genome_classes: tuple[int, ...] = (0, 1, 2, 3, 4)
-    budgets: tuple[int, ...] = (0, 10, 30, 100, 300)
+    budgets: tuple[int, ...] = (0, 1, 3, 10, 30, 100, 300)
 
     def __post_init__(self) -> None:
         validation.instance("sweep", self.sweep, CompressionSweep)
