@@ -37,10 +37,12 @@ class VarianceSplit(NamedTuple):
     p: float
 
 
-def variance_split(returns, level: float = 0.95) -> VarianceSplit:
+def variance_split(returns, level: float = 0.95, crossed: bool = False) -> VarianceSplit:
     """One-way random-effects split of ``returns`` (N, k), N >= 2, k >= 2, with intervals
     at ``level`` in (0, 1). The individuals' means must differ and so must the episodes of
-    at least one individual (else F is 0 or infinite)."""
+    at least one individual (else F is 0 or infinite). ``crossed``: every individual met
+    the same k conditions (parts of one test set), whose shared effect is taken out first
+    (two-way without replication: within is the residual, on (N - 1)(k - 1) dof)."""
     x = validation.real_array("returns", returns, ndim=2)
     if min(x.shape) < 2:
         raise ValueError(f"returns must have N >= 2 individuals and k >= 2 episodes, got {x.shape}")
@@ -48,13 +50,17 @@ def variance_split(returns, level: float = 0.95) -> VarianceSplit:
     n, k = x.shape
     means = x.mean(axis=1)
     msb = k * means.var(ddof=1)
-    msw = ((x - means[:, None]) ** 2).sum() / (n * (k - 1))
+    residual = x - means[:, None]
+    if crossed:
+        residual = residual - residual.mean(axis=0)
+    df2 = (n - 1) * (k - 1) if crossed else n * (k - 1)
+    msw = (residual**2).sum() / df2
     if msw <= 0:
         raise ValueError("returns: every individual's episodes are identical, so F is infinite")
     if msb <= 0:
         raise ValueError("returns: every individual has the same mean, so F is 0")
     f = float(msb / msw)
-    df1, df2 = n - 1, n * (k - 1)
+    df1 = n - 1
     upper = scipy_stats.f.ppf(0.5 + level / 2, df1, df2)
     lower = scipy_stats.f.ppf(0.5 - level / 2, df1, df2)
     f_low, f_high = f / upper, f / lower

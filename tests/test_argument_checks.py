@@ -85,13 +85,17 @@ def test_bet_hedging_scores_refuse_empty_or_non_finite_returns():
 @pytest.mark.parametrize(
     ("make", "error", "match"),
     [
-        (lambda: EvolutionConfig(stochastic="yes"), TypeError, "stochastic must be a bool"),
-        (lambda: EvolutionConfig(rho_init=100), ValueError, "rho_init must be < 88"),
-        (lambda: EvolutionConfig(rho_init=float("nan")), ValueError, "rho_init must be finite"),
+        (lambda: EvolutionConfig(sigma=-0.1), ValueError, "sigma must be"),
+        (lambda: EvolutionConfig(sigma=float("nan")), ValueError, "sigma must be"),
         (
-            lambda: EvolutionSweep("bogus", EvolutionConfig(), (2,), (0,)),
+            lambda: EvolutionSweep("bogus", EvolutionConfig(), (2,), (0.0,), (0,)),
             ValueError,
             "dataset must be one of",
+        ),
+        (
+            lambda: EvolutionSweep("digits", EvolutionConfig(), (2,), (0.1, 0.0), (0,)),
+            ValueError,
+            "sigmas must start at 0",
         ),
         (lambda: HedgingConfig((), (0,)), ValueError, "rho_inits must not be empty"),
         (lambda: HedgingConfig((-5.0, -5), (0,)), ValueError, "rho_inits must not repeat"),
@@ -117,7 +121,8 @@ def test_configs_at_the_edges_are_taken():
     config = ppo.PPOConfig(total_steps=5 * 2048, num_evals=5)
     chunk = config.iterations // config.num_evals
     assert config.num_evals * chunk * config.steps_per_iteration <= config.total_steps
-    assert EvolutionSweep("digits", EvolutionConfig(rho_init=87.0), (2,), (0,)).cells()
+    cells = EvolutionSweep("digits", EvolutionConfig(), (2,), (0.0, 1e-9), (0,)).cells()
+    assert [c.sigma for c in cells] == [0.0, 1e-9] and not cells[0].stochastic
 
 
 def test_a_classifier_model_is_built_for_an_input_width():

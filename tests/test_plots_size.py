@@ -10,8 +10,9 @@ import matplotlib
 import numpy as np
 import pytest
 
-from sgb.experiments import rl_spread
+from sgb.experiments import evolution, rl_spread
 from sgb.experiments.bet_hedging import BetHedgingResults, HedgingGenome
+from sgb.experiments.evolution import EvolutionResults
 from sgb.experiments.theory import FixedPoint
 from sgb.plots import (
     COLUMN_IN,
@@ -195,6 +196,27 @@ HEDGING = BetHedgingResults.model_validate(
         ]
     }
 )
+EVOLVED_CELLS = [
+    {
+        "hidden_types": 8,
+        "sigma": sigma,
+        "seed": seed,
+        "compression": 5.0,
+        "mean_fitness": np.linspace(0.1, 0.8, 100).tolist(),
+        "individuals": RNG.uniform(0.7, 0.9, 20).tolist(),
+        "mean_network": 0.8,
+        "wall_time_s": 1.0,
+    }
+    for sigma in (0.0, 0.15, 0.5, 1.5)
+    for seed in range(3)
+]
+EVOLVED = EvolutionResults.model_validate(
+    {
+        "dataset": "digits",
+        "records": EVOLVED_CELLS,
+        "convergence": [evolution.convergence(c) for c in EVOLVED_CELLS],
+    }
+)
 FRAMES = {name: np.zeros((40, 60, 3)) for name in ("normal", "long legs", "slippery")}
 
 # each figure function on synthetic data of its shape, drawn in its test
@@ -209,6 +231,7 @@ FIGURES = {
     "theory.fixed_point": lambda: theory.fixed_point(FIXED),
     "beyond.plot_condition_returns": lambda: beyond.plot_condition_returns(GENOME),
     "beyond.plot_hedging": lambda: beyond.plot_hedging(HEDGING),
+    "beyond.plot_evolution": lambda: beyond.plot_evolution(EVOLVED),
     "rl.plot_spread": lambda: rl.plot_spread(SPREAD),
     "rl.plot_backends": lambda: rl.plot_backends(BENCH),
     "rl.plot_mean_network": lambda: rl.plot_mean_network(

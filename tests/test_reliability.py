@@ -49,3 +49,21 @@ def test_the_detectable_between_sd_is_found_four_times_in_five():
     assert detectable_between_sd(n, k_needed - 1, 1.0) > sd / 2
     assert between_sd_at(0.2, 4.0) == pytest.approx(1.0)
     assert between_sd_at(-0.01, 4.0) == 0.0
+
+
+def test_a_crossed_split_takes_out_the_shared_parts_and_keeps_its_coverage():
+    """Every individual scored on the same 10 parts, whose difficulty (SD 3) dwarfs the
+    individuals' (SD 0.5) and the residual (SD 1): crossed, the split recovers the ICC
+    0.2 with its stated coverage; one-way, the parts' spread drowns the individuals."""
+    rng = np.random.default_rng(6)
+    sigma_b, sigma_w, n, k = 0.5, 1.0, 100, 10
+    icc = sigma_b**2 / (sigma_b**2 + sigma_w**2)
+    covered = 0
+    for _ in range(200):
+        parts = rng.normal(0, 3.0, (1, k))
+        x = parts + rng.normal(0, sigma_b, (n, 1)) + rng.normal(0, sigma_w, (n, k))
+        split = variance_split(x, crossed=True)
+        covered += split.icc_ci[0] <= icc <= split.icc_ci[1]
+    assert 0.91 <= covered / 200 <= 0.99
+    assert split.within_var == pytest.approx(sigma_w**2, rel=0.15)
+    assert variance_split(x).icc < 0.05 < split.icc

@@ -1,16 +1,18 @@
 """Evolution without gradients (chapter 6, registered as ``evolution``): does stochastic
 development help a genome that evolution, not gradient descent, shapes?
 
-The paper trains its genomes by gradient descent and argues that the mechanism should hold
-although "Darwinian evolution is not differentiable". Here an evolution strategy
-(``sgb.evolution``: OpenAI-ES from evosax) evolves the type tables of an SGB classifier
-from fitness alone, the mean innate accuracy of the individuals a candidate genome
-develops. Each cell evolves one genome at one number of hidden types (a compression
-ratio) and seed, either stochastic (means and spreads evolved, ``individuals`` networks
-scored per candidate) or deterministic (sigma = 0: the means alone, one network per
-candidate); the two settings of a seed start from the same means. Each cell keeps its
-fitness curves and the test accuracy of ``eval_individuals`` individuals of its last mean
-genome and of that genome's mean network.
+The paper trains its genomes by gradient descent and states, as a limitation, that
+"Darwinian evolution is not differentiable". Here an evolution strategy
+(``sgb.evolution``: OpenAI-ES from evosax) evolves the type means of an SGB classifier
+from fitness alone, the mean innate accuracy of the networks a candidate genome develops.
+The spread is held at one of ``sigmas`` rather than evolved, 0 the deterministic genome,
+so that a stochastic genome's individuals differ by design (the variance split of their
+test accuracies says by how much), and every genome gets the same number of fitness
+evaluations. Each cell evolves one genome at one number of hidden types, spread and seed;
+the genomes of a seed start from the same means. Each cell keeps its fitness curves, the
+test accuracy of ``eval_individuals`` individuals of its last mean genome and of that
+genome's mean network, and the variance split; the summary gives each curve's slope over
+its last fifth (has it converged?).
 
 ``run`` writes ``evolution_<dataset>_<profile>.json`` after every cell, atomically, with
 provenance; a rerun with the same config skips the cells already there.
@@ -31,16 +33,20 @@ from sgb.claims import Row, judge
 from sgb.compression import compression
 from sgb.data import DATASETS, load
 from sgb.evolution import EvolutionConfig, evolve
+from sgb.profiles import check_profile
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
-from sgb.provenance import git_commit
+from sgb.provenance import git_commit, read_results, results_file
+from sgb.queued import Queue, file_run, run_lock
 from sgb.recording import Recording, start
 from sgb.results import Records
 from sgb.schemas import (
     Accuracy,
     Compression,
     Count,
+    Finite,
     List,
     NonNegative,
+    Probability,
     Provenance,
     Record,
     ResultsFile,
@@ -51,35 +57,49 @@ from sgb.schemas import (
 
 @dataclasses.dataclass(frozen=True)
 class EvolutionSweep:
-    """Every (hidden types, seed, stochastic or not) of ``base`` on ``dataset``: the hidden
-    layer's types are each of ``hidden_types``, the input and output types ``base``'s."""
+    """Every (hidden types, spread, seed) of ``base`` on ``dataset``: the hidden layer's
+    types are each of ``hidden_types``, the input and output types ``base``'s, the spread
+    each of ``sigmas`` (0 first: the deterministic genome every other is compared with)."""
 
     dataset: str
     base: EvolutionConfig
     hidden_types: tuple[int, ...]
+    sigmas: tuple[float, ...]
     seeds: tuple[int, ...]
 
     def __post_init__(self) -> None:
         validation.choice("dataset", self.dataset, DATASETS)
         validation.instance("base", self.base, EvolutionConfig)
         validation.integers("hidden_types", self.hidden_types, minimum=1)
+        validation.distinct("sigmas", validation.reals("sigmas", self.sigmas))
+        if self.sigmas[0] != 0 or min(self.sigmas) < 0:
+            raise ValueError(f"sigmas must start at 0 and be positive after, got {self.sigmas}")
         validation.integers("seeds", self.seeds, minimum=0)
 
     def cells(self) -> list[EvolutionConfig]:
-        """One config per cell, seed by seed, stochastic first."""
+        """One config per cell, seed by seed."""
         in_types, _, out_types = self.base.cell_types
         return [
             dataclasses.replace(
-                self.base, cell_types=(in_types, k, out_types), stochastic=stochastic, seed=seed
+                self.base, cell_types=(in_types, k, out_types), sigma=sigma, seed=seed
             )
             for seed in self.seeds
             for k in self.hidden_types
-            for stochastic in (True, False)
+            for sigma in self.sigmas
         ]
 
 
-def _key(config: EvolutionConfig) -> tuple[int, bool, int]:
-    return config.cell_types[1], config.stochastic, config.seed
+def _key(config: EvolutionConfig) -> str:
+    """A cell's name in the results file's locks and the queue: ``k8_sigma0.1_s2``."""
+    return f"k{config.cell_types[1]}_sigma{config.sigma:g}_s{config.seed}"
+
+
+def _record_key(record: dict) -> str:
+    return f"k{record['hidden_types']}_sigma{record['sigma']:g}_s{record['seed']}"
+
+
+GENERATIONS = 3000
+SIGMAS = (0.0, 0.15, 0.5, 1.5)  # 0: the deterministic genome (a pilot: CHANGELOG)
 
 
 def run_cell(config: EvolutionConfig, data) -> dict[str, Any]:
@@ -91,7 +111,7 @@ def run_cell(config: EvolutionConfig, data) -> dict[str, Any]:
     in_types = sizes[0] if in_types is None else in_types
     record: dict[str, Any] = {
         "hidden_types": hidden_types,
-        "stochastic": config.stochastic,
+        "sigma": config.sigma,
         "seed": config.seed,
         "compression": compression("sgb", sizes, hidden_types, in_types, out_types),
         "compression_authors": compression(
@@ -105,42 +125,100 @@ def run_cell(config: EvolutionConfig, data) -> dict[str, Any]:
 
 
 def run(profile: str, out_dir: Path, progress: bool = True) -> Path:
-    """Evolve every cell of ``profile`` not yet in its results file, writing the file with
-    provenance after each."""
+    """Evolve every cell of ``profile`` that no other process holds and no run has
+    finished, writing the results file with provenance after each."""
     recording = start(PROFILES, profile, out_dir, lambda sweep: f"evolution_{sweep.dataset}")
-    sweep = recording.config
+    sweep, path = recording.config, recording.path
     data = load(sweep.dataset, seed=0)
+
+    def held() -> list[dict]:
+        return list(recording.earlier().get("records", []))
+
     return train_cells(
-        recording.path,
+        path,
         sweep.cells(),
-        list(recording.earlier().get("records", [])),
-        (_key, lambda r: (r["hidden_types"], r["stochastic"], r["seed"])),
+        held(),
+        (_key, _record_key),
         lambda cell: run_cell(cell, data),
         lambda records: _write(recording, records),
         f"evolution {sweep.dataset}",
         progress,
+        shared=(lambda cell: run_lock(path, _key(cell)), held),
     )
 
 
+def queued(profile: str, results_dir: Path) -> Queue:
+    """The cells of ``profile`` under ``results_dir`` in the order they evolve (each one
+    chunk: a cell is not resumable), for the background queue (``sgb.grid``)."""
+    sweep = PROFILES[check_profile(profile)]
+    path = results_file(results_dir, f"evolution_{sweep.dataset}", profile)
+    records = read_results(path)["results"]["records"] if path.exists() else []
+    done = {_record_key(r): r for r in records}
+    runs = []
+    for cell in sweep.cells():
+        label = f"sigma {cell.sigma:g} seed {cell.seed}"
+        runs.append(file_run(label, path, _key(cell), done.get(_key(cell))))
+    return Queue(path, tuple(runs))
+
+
 def _write(recording: Recording, records: list[dict]) -> Path:
-    results = {"dataset": recording.config.dataset, "records": records}
+    order = {_key(cell): j for j, cell in enumerate(recording.config.cells())}
+    records = sorted(records, key=lambda r: order[_record_key(r)])
+    results = {
+        "dataset": recording.config.dataset,
+        "records": records,
+        "convergence": [convergence(r) for r in records],
+    }
     return recording.write(results, recording.config.seeds, parts=records)
+
+
+CONVERGED_SHARE = 0.2  # the last fifth of the generations
+
+
+def convergence(record: dict) -> dict[str, Any]:
+    """The slope of a cell's mean fitness over its last ``CONVERGED_SHARE`` of generations,
+    in accuracy points per 1,000 generations, with its 95 % interval (a least-squares
+    line, ``sgb.stats.slope``)."""
+    fitness = 100 * np.asarray(record["mean_fitness"])
+    start = int(len(fitness) * (1 - CONVERGED_SHARE))
+    test = stats.slope(np.arange(start, len(fitness)) / 1000, fitness[start:])
+    return {
+        "hidden_types": record["hidden_types"],
+        "sigma": record["sigma"],
+        "seed": record["seed"],
+        "slope": test.estimate,
+        "slope_ci": [test.low, test.high],
+    }
 
 
 PROFILES: dict[str, EvolutionSweep] = {
     "smoke": EvolutionSweep(
         "digits",
-        EvolutionConfig(hidden=16, candidates=16, individuals=4, generations=20, batch_size=128),
+        EvolutionConfig(
+            hidden=16,
+            cell_types=(None, 2, None),
+            candidates=16,
+            individuals=4,
+            generations=20,
+            batch_size=128,
+            eval_individuals=10,
+        ),
         hidden_types=(2,),
+        sigmas=(0.0, 0.1),
         seeds=(0,),
     ),
     "cpu": EvolutionSweep(
-        "digits", EvolutionConfig(generations=2000), hidden_types=(2, 8), seeds=(0, 1, 2, 3, 4)
+        "digits",
+        EvolutionConfig(cell_types=(None, 8, None), generations=GENERATIONS),
+        hidden_types=(8,),
+        sigmas=SIGMAS,
+        seeds=(0, 1, 2, 3, 4),
     ),
     "paper": EvolutionSweep(
         "fashion-mnist",
-        EvolutionConfig(hidden=64, generations=10_000),
-        hidden_types=(2, 8),
+        EvolutionConfig(hidden=64, cell_types=(None, 8, None), generations=4 * GENERATIONS),
+        hidden_types=(8,),
+        sigmas=SIGMAS,
         seeds=(0, 1, 2, 3, 4),
     ),
 }
@@ -148,126 +226,158 @@ PROFILES: dict[str, EvolutionSweep] = {
 
 def evolution_rows(results: "EvolutionResults") -> list[Row]:
     """Evolution without gradients (``sgb.experiments.evolution``): per number of hidden
-    types, the stochastic genome's individuals (their mean test accuracy) against the
-    deterministic genome's network, paired by seed (both start from the same means)."""
+    types and spread sigma > 0, the genome's individuals (their mean test accuracy)
+    against the deterministic genome's network, paired by seed (both start from the same
+    means), in points."""
     records = results.records
     rows = []
     for k in sorted({r.hidden_types for r in records}):
-        by_seed = {
-            stochastic: {
-                r.seed: r for r in records if r.hidden_types == k and r.stochastic is stochastic
-            }
-            for stochastic in (True, False)
-        }
-        seeds = sorted(set(by_seed[True]) & set(by_seed[False]))
-        if len(seeds) < 2:
-            continue
-        stochastic = [100 * np.mean(by_seed[True][s].individuals) for s in seeds]
-        deterministic = [100 * by_seed[False][s].mean_network for s in seeds]
-        first = by_seed[True][seeds[0]]
-        rows.append(
-            judge(
-                "ch6.evolution_stochastic_helps",
-                f"{results.dataset}, {k} hidden types ({first.compression:.0f}x)",
-                stats.paired(stochastic, deterministic),
-                f"{len(first.mean_fitness)} generations, {len(seeds)} seeds",
+        by_sigma = {}
+        for r in records:
+            if r.hidden_types == k:
+                by_sigma.setdefault(r.sigma, {})[r.seed] = r
+        deterministic = by_sigma.get(0.0, {})
+        for sigma, cells in sorted(by_sigma.items()):
+            seeds = sorted(set(cells) & set(deterministic))
+            if sigma == 0 or len(seeds) < 2:
+                continue
+            first = cells[seeds[0]]
+            rows.append(
+                judge(
+                    "ch6.evolution_stochastic_helps",
+                    f"{results.dataset}, {k} hidden types ({first.compression:.0f}x), "
+                    f"sigma {sigma:g}",
+                    stats.paired(
+                        [100 * np.mean(cells[s].individuals) for s in seeds],
+                        [100 * deterministic[s].mean_network for s in seeds],
+                    ),
+                    f"{len(first.mean_fitness)} generations, {len(seeds)} seeds",
+                )
             )
-        )
     return rows
 
 
 def evolution(payload: "Evolution | None") -> dict[str, str]:
     """Evolution without gradients (``evolution_digits_cpu.json``): the design
-    (``evo_design``), per number of hidden types k the two genomes' test accuracies
-    (``evo_k{k}_stochastic``, ``evo_k{k}_deterministic``: mean +- SEM over seeds, %), the
-    evolved spreads (``evo_sigma``) and the rows of ``evolution_rows``
-    (``evo_k{k}_*``); ``NOT_RUN`` for all without the file. Names for k = 2 and 8."""
-    texts = {"evo_design": NOT_RUN, "evo_sigma": NOT_RUN}
-    for k in (2, 8):
-        texts |= {f"evo_k{k}_{g}": NOT_RUN for g in ("stochastic", "deterministic")}
-        texts |= row_texts(f"evo_k{k}", None)
+    (``evo_design``), the deterministic genome's test accuracy (``evo_deterministic``,
+    mean +- SEM over seeds), the slopes of the fitness over the last fifth
+    (``evo_slopes``), and per spread j of ``SIGMAS`` past 0 its sigma (``evo_s{j}``), its
+    individuals' test accuracy (``evo_s{j}_individuals``), how much they differ
+    (``evo_s{j}_split``: the variance split, medians over seeds) and its row of
+    ``evolution_rows`` (``evo_s{j}_*``); ``NOT_RUN`` for all without the file."""
+    texts = {"evo_design": NOT_RUN, "evo_deterministic": NOT_RUN, "evo_slopes": NOT_RUN}
+    for j, sigma in enumerate(SIGMAS[1:], 1):
+        texts[f"evo_s{j}"] = f"{sigma:g}"
+        texts |= {f"evo_s{j}_{g}": NOT_RUN for g in ("individuals", "split")}
+        texts |= row_texts(f"evo_s{j}", None)
     if payload is None:
         return texts
     records = payload.results.records
-    candidates = payload.provenance.config.base.candidates
+    base = payload.provenance.config.base
     texts["evo_design"] = (
-        f"{len(records[0].mean_fitness)} generations of {candidates} candidate genomes, "
+        f"{len(records[0].mean_fitness)} generations of {base.candidates} candidate genomes, "
+        f"each scored by {base.individuals} networks on {base.individuals} batches, "
         f"{len({r.seed for r in records})} seeds"
     )
-    sigma = [r.sigma_mean for r in records if r.stochastic]
-    texts["evo_sigma"] = f"{min(sigma):.2f} to {max(sigma):.2f}"
-    for k in (2, 8):
-        for stochastic, name in ((True, "stochastic"), (False, "deterministic")):
-            values = np.array(
-                [
-                    100 * np.mean(r.individuals)
-                    for r in records
-                    if r.hidden_types == k and r.stochastic is stochastic
-                ]
-            )
-            if values.size > 1:
-                sem = values.std(ddof=1) / math.sqrt(values.size)
-                texts[f"evo_k{k}_{name}"] = f"{values.mean():.1f} ± {sem:.1f} %"
+    slopes = [c.slope for c in payload.results.convergence]
+    texts["evo_slopes"] = f"{min(slopes):+.2f} to {max(slopes):+.2f}"
+    texts["evo_deterministic"] = _mean_sem([100 * r.mean_network for r in records if r.sigma == 0])
     card = claims.by_key(evolution_rows(payload.results))
-    for k in (2, 8):
+    for j, sigma in enumerate(SIGMAS[1:], 1):
+        cells = [r for r in records if r.sigma == sigma]
+        if not cells:
+            continue
+        texts[f"evo_s{j}_individuals"] = _mean_sem([100 * np.mean(r.individuals) for r in cells])
+        splits = [r.variance_split for r in cells]
+        texts[f"evo_s{j}_split"] = (
+            f"individuals differ by an SD of {100 * np.median([v.between_sd for v in splits]):.1f} "
+            f"points, against {100 * np.median([v.within_sd for v in splits]):.1f} between "
+            f"parts of the test set (ICC {np.median([v.icc for v in splits]):.2f})"
+        )
         texts |= row_texts(
-            f"evo_k{k}", row_of(card, "ch6.evolution_stochastic_helps", f" {k} hidden")
+            f"evo_s{j}", row_of(card, "ch6.evolution_stochastic_helps", f"sigma {sigma:g}")
         )
     return texts
 
 
+def _mean_sem(values: list[float]) -> str:
+    values = np.asarray(values)
+    if values.size < 2:
+        return f"{values.mean():.1f} %"
+    return f"{values.mean():.1f} ± {values.std(ddof=1) / math.sqrt(values.size):.1f} %"
+
+
 def evidence(records: Records) -> list[Row]:
-    """The stochastic genome against the deterministic one (``evolution_rows``)."""
+    """Each stochastic genome against the deterministic one (``evolution_rows``)."""
     payload = records.get("evolution")
     return [] if payload is None else evolution_rows(payload.results)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
     """What chapter 6 glues of evolution (``evolution``)."""
-    return evolution(records("evolution"))
+    return evolution(records.get("evolution"))
 
 
 def evolution_table(payload: "Evolution") -> pd.DataFrame:
     """Evolution without gradients (``sgb.experiments.evolution``), one row per cell:
-    hidden types, compression (ours), genome, seed, the last generation's mean fitness,
-    the test accuracy (%) of the evolved genome's individuals (their mean and SD, in
-    points) and of its mean network, the evolved spreads' mean sigma and the wall time."""
+    hidden types, compression (ours), sigma, seed, the last generation's mean fitness and
+    the slope over the last fifth (points per 1,000 generations), the test accuracy (%) of
+    the evolved genome's individuals (their mean and SD, in points) and of its mean
+    network, the individuals' ICC over parts of the test set, and the wall time."""
+    slopes = {(c.hidden_types, c.sigma, c.seed): c.slope for c in payload.results.convergence}
     return pd.DataFrame(
         {
             "hidden types": r.hidden_types,
             "compression": r.compression,
-            "genome": "stochastic" if r.stochastic else "deterministic",
+            "sigma": r.sigma,
             "seed": r.seed,
             "last fitness": r.mean_fitness[-1],
+            "slope, last fifth": slopes[(r.hidden_types, r.sigma, r.seed)],
             "individuals (% accuracy)": 100 * float(np.mean(r.individuals)),
             "SD of individuals (points)": 100 * float(np.std(r.individuals, ddof=1)),
             "mean network (% accuracy)": 100 * r.mean_network,
-            "sigma": r.sigma_mean,
+            "ICC": math.nan if r.variance_split is None else r.variance_split.icc,
             "wall time (s)": r.wall_time_s,
         }
         for r in payload.results.records
     )
 
 
+class VarianceSplitRecord(Record):
+    between_sd: NonNegative
+    within_sd: NonNegative
+    icc: Finite
+    p: Probability
+
+
 class EvolutionRecord(Record):
     hidden_types: Count
-    stochastic: bool
+    sigma: NonNegative
     seed: Seed
     compression: Compression
     mean_fitness: List[Accuracy]
     individuals: List[Accuracy]
     mean_network: Accuracy
-    sigma_mean: NonNegative
+    variance_split: VarianceSplitRecord | None = None
     wall_time_s: Seconds
+
+
+class Convergence(Record):
+    hidden_types: Count
+    sigma: NonNegative
+    seed: Seed
+    slope: Finite
 
 
 class EvolutionResults(Record):
     dataset: str
     records: List[EvolutionRecord]
+    convergence: List[Convergence]
 
 
 class Candidates(Record):
     candidates: Count
+    individuals: Count
 
 
 class SweepConfig(Record):

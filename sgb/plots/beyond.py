@@ -13,52 +13,37 @@ from sgb.plots import PALETTE, WIDTH, axes_or_new
 from sgb.schemas import Record
 from sgb.stats import sem
 
-_GENOMES = ((True, "stochastic genome", PALETTE["sgb"]), (False, "deterministic", "#555555"))
 _POPULATIONS = (("individuals", PALETTE["individuals"]), ("clones", PALETTE["mean_network"]))
 
 
-def _cells(records: Sequence[Record], k: int, stochastic: bool) -> list[Record]:
-    return [r for r in records if r.hidden_types == k and r.stochastic is stochastic]
-
-
 def plot_evolution(results: Record, axes: Sequence[Axes] | None = None) -> list:
-    """``results``: an ``EvolutionResults`` record. Two panels. Left: fitness (training accuracy
-    of the candidates' individuals, %) per generation, mean over seeds, for each number of
-    hidden types and genome. Right: test accuracy (%) of the evolved genome's individuals
-    (their mean) and of the deterministic genome's network, mean over seeds with SEM error
-    bars and each seed as a dot. Returns the axes."""
+    """``results``: an ``EvolutionResults`` record. Two panels. Left: fitness (training
+    accuracy of the candidates' networks, %) per generation, mean over seeds, per spread
+    sigma (0 the deterministic genome). Right: per sigma, the test accuracy (%) of the
+    evolved genome's individuals (their mean; bars, mean over seeds with SEM error bars,
+    each seed a dot) and of its mean network (a black tick). Returns the axes."""
     curves, bars = axes_or_new(axes, 1, 2, figsize=(WIDTH, 4.4))
     records = results.records
-    ks = sorted({r.hidden_types for r in records})
-    for j, k in enumerate(ks):
-        for i, (stochastic, label, color) in enumerate(_GENOMES):
-            cells = _cells(records, k, stochastic)
-            if not cells:
-                continue
-            fitness = 100 * np.mean([c.mean_fitness for c in cells], axis=0)
-            style = "-" if j == len(ks) - 1 else ":"
-            curves.plot(fitness, style, color=color, lw=1.2, label=f"{label}, {k} types")
-            accuracy = [100 * np.mean(c.individuals) for c in cells]
-            x = j + (i - 0.5) * 0.38
-            error = sem(np.asarray(accuracy)) if len(accuracy) > 1 else 0.0
-            bars.bar(
-                x,
-                np.mean(accuracy),
-                0.36,
-                yerr=error,
-                capsize=3,
-                color=color,
-                alpha=0.75,
-                label=label if j == 0 else None,
-            )
-            bars.plot(np.full(len(accuracy), x), accuracy, "k.", ms=4)
+    sigmas = sorted({r.sigma for r in records})
+    colors = sns.color_palette("viridis", len(sigmas))
+    for j, sigma in enumerate(sigmas):
+        cells = [r for r in records if r.sigma == sigma]
+        label = "sigma 0 (deterministic)" if sigma == 0 else f"sigma {sigma:g}"
+        fitness = 100 * np.mean([c.mean_fitness for c in cells], axis=0)
+        curves.plot(fitness, color=colors[j], lw=1.2, label=label)
+        accuracy = [100 * np.mean(c.individuals) for c in cells]
+        error = sem(np.asarray(accuracy)) if len(accuracy) > 1 else 0.0
+        bars.bar(j, np.mean(accuracy), 0.7, yerr=error, capsize=3, color=colors[j], alpha=0.75)
+        bars.plot(np.full(len(accuracy), j), accuracy, "k.", ms=4)
+        mean_network = 100 * np.mean([c.mean_network for c in cells])
+        bars.plot(j, mean_network, "k_", ms=18, mew=2, label="mean network" if j == 0 else None)
     curves.set_xlabel("generation")
     curves.set_ylabel("fitness: innate training accuracy (%)")
-    curves.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.18))
-    compression = {r.hidden_types: r.compression for r in records}
-    bars.set_xticks(range(len(ks)), [f"{k} types\n({compression[k]:.0f}x)" for k in ks])
+    curves.legend(fontsize=8)
+    bars.set_xticks(range(len(sigmas)), [f"{s:g}" for s in sigmas])
+    bars.set_xlabel("sigma, held fixed")
     bars.set_ylabel("innate test accuracy (%)")
-    bars.legend(fontsize=8, loc="upper left")
+    bars.legend(fontsize=8, loc="lower right")
     return [curves, bars]
 
 
