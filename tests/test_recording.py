@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from sgb.provenance import read_results
-from sgb.recording import start
+from sgb.recording import held_results, start
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +48,9 @@ def test_parts_give_the_wall_time_and_commits_and_a_rerun_resumes(tmp_path):
     other = dataclasses.replace(recording, config=Toy("digits", 6))
     with pytest.raises(ValueError, match="another config"):
         other.earlier()
+    # a listing of what is still to do reads a file of another design as nothing done
+    assert held_results(recording.path, Toy("digits", 6)) == {}
+    assert held_results(recording.path, Toy("digits", 5)) == {"parts": parts}
 
 
 def test_a_run_without_parts_is_timed_from_its_start(tmp_path):

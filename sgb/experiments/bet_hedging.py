@@ -49,8 +49,8 @@ from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card, row_texts
 from sgb.provenance import git_commit, results_file
 from sgb.queued import Queue, QueuedRun
-from sgb.recording import Recording, start
-from sgb.results import Records, read_results
+from sgb.recording import Recording, held_results, start
+from sgb.results import Records
 from sgb.resume import peek
 from sgb.rl.envs import VARIANTS
 from sgb.rl.population import population_returns
@@ -260,7 +260,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
     last chunk; a genome trained here keeps its checkpoint, landed as it appears."""
     config = PROFILES[check_profile(profile)]
     path = results_file(Path(results_dir) / "rl", "bet_hedging_ant", profile)
-    genomes = read_results(path)["results"]["genomes"] if path.exists() else []
+    genomes = held_results(path, config).get("genomes", [])
     records = {(g["rho_init"], g["training_seed"]): g for g in genomes}
     runs = []
     for rho, seed in config.genomes():

@@ -35,9 +35,9 @@ from sgb.data import DATASETS, load
 from sgb.evolution import EvolutionConfig, evolve
 from sgb.profiles import check_profile
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
-from sgb.provenance import git_commit, read_results, results_file
+from sgb.provenance import git_commit, results_file
 from sgb.queued import Queue, file_run, run_lock
-from sgb.recording import Recording, start
+from sgb.recording import Recording, held_results, start
 from sgb.results import Records
 from sgb.schemas import (
     Accuracy,
@@ -152,8 +152,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
     chunk: a cell is not resumable), for the background queue (``sgb.grid``)."""
     sweep = PROFILES[check_profile(profile)]
     path = results_file(results_dir, f"evolution_{sweep.dataset}", profile)
-    records = read_results(path)["results"]["records"] if path.exists() else []
-    done = {_record_key(r): r for r in records}
+    done = {_record_key(r): r for r in held_results(path, sweep).get("records", [])}
     runs = []
     for cell in sweep.cells():
         label = f"sigma {cell.sigma:g} seed {cell.seed}"
