@@ -94,11 +94,16 @@ def accuracies(
     """Accuracy of network j on (x[j], y[j]), x (K, B, features), y (K, B): network j drawn
     with ``keys[j]``, or for a genome that is not ``stochastic`` its mean network on every
     batch; shape (K,)."""
+    return _correct(model, developed, x, y, keys, stochastic).mean(axis=-1)
+
+
+def _correct(model, developed, x, y, keys, stochastic) -> jnp.ndarray:
+    """Whether network j (``accuracies``) names each example of x[j] right, (K, B)."""
     if not stochastic:
         logits = jax.vmap(lambda xj: model.apply(developed, xj, mean_network=True))(x)
     else:
         logits = jax.vmap(lambda k, xj: model.apply(developed, xj, rngs={"sample": k}))(keys, x)
-    return (jnp.argmax(logits, -1) == y).mean(axis=-1)
+    return jnp.argmax(logits, -1) == y
 
 
 def part_accuracies(
@@ -109,18 +114,15 @@ def part_accuracies(
     keys: jax.Array,
     stochastic: bool,
 ) -> np.ndarray:
-    """Each network's accuracy on each of ``TEST_PARTS`` equal parts of (x, y) (the
-    remainder left out), shape (len(keys), TEST_PARTS); one row for a genome that is not
-    ``stochastic``."""
+    """Each network's accuracy on each of ``TEST_PARTS`` equal parts of (x, y), x (N,
+    features), the remainder left out: shape (len(keys), TEST_PARTS); one row for a
+    genome that is not ``stochastic``."""
     size = len(x) // TEST_PARTS
     x, y = x[: size * TEST_PARTS], y[: size * TEST_PARTS]
     n = len(keys) if stochastic else 1
-    if not stochastic:
-        logits = model.apply(developed, x, mean_network=True)[None]
-    else:
-        logits = jax.vmap(lambda k: model.apply(developed, x, rngs={"sample": k}))(keys)
-    correct = np.asarray(jnp.argmax(logits, -1) == y, dtype=np.float64)
-    return correct.reshape(n, TEST_PARTS, size).mean(axis=-1)
+    every = (n, *x.shape)
+    correct = _correct(model, developed, jnp.broadcast_to(x, every), y, keys[:n], stochastic)
+    return np.asarray(correct, dtype=np.float64).reshape(n, TEST_PARTS, size).mean(axis=-1)
 
 
 def evolve(config: EvolutionConfig, data: Dataset) -> dict[str, Any]:
