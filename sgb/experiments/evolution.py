@@ -172,6 +172,10 @@ def _write(recording: Recording, records: list[dict]) -> Path:
 
 
 CONVERGED_SHARE = 0.2  # the last fifth of the generations
+# A run still rises if its fitness gains more than this over its last fifth, in points per
+# 1,000 generations: a point more from 1,000 generations more. (A fitness curve's steps are
+# correlated, so the least-squares interval is too narrow to say it.)
+RISING = 1.0
 
 
 def convergence(record: dict) -> dict[str, Any]:
@@ -260,11 +264,13 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
     """Evolution without gradients (``evolution_digits_cpu.json``): the design
     (``evo_design``), the deterministic genome's test accuracy (``evo_deterministic``,
     mean +- SEM over seeds), the slopes of the fitness over the last fifth
-    (``evo_slopes``), and per spread j of ``SIGMAS`` past 0 its sigma (``evo_s{j}``), its
+    (``evo_slopes``), the runs still rising by more than ``RISING`` (``evo_rising``), and
+    per spread j of ``SIGMAS`` past 0 its sigma (``evo_s{j}``), its
     individuals' test accuracy (``evo_s{j}_individuals``), how much they differ
     (``evo_s{j}_split``: the variance split, medians over seeds) and its row of
     ``evolution_rows`` (``evo_s{j}_*``); ``NOT_RUN`` for all without the file."""
     texts = {"evo_design": NOT_RUN, "evo_deterministic": NOT_RUN, "evo_slopes": NOT_RUN}
+    texts["evo_rising"] = NOT_RUN
     for j, sigma in enumerate(SIGMAS[1:], 1):
         texts[f"evo_s{j}"] = f"{sigma:g}"
         texts |= {f"evo_s{j}_{g}": NOT_RUN for g in ("individuals", "split")}
@@ -278,8 +284,16 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
         f"each scored by {base.individuals} networks on {base.individuals} batches, "
         f"{len({r.seed for r in records})} seeds"
     )
-    slopes = [c.slope for c in payload.results.convergence]
+    convergence = payload.results.convergence
+    slopes = [c.slope for c in convergence]
     texts["evo_slopes"] = f"{min(slopes):+.2f} to {max(slopes):+.2f}"
+    rising = [c for c in convergence if c.slope > RISING]
+    by_sigma = ", ".join(
+        f"{sum(c.sigma == sigma for c in rising)} of {sum(c.sigma == sigma for c in convergence)} "
+        f"at sigma {sigma:g}"
+        for sigma in dict.fromkeys(c.sigma for c in convergence)
+    )
+    texts["evo_rising"] = f"{len(rising)} of {len(convergence)} runs ({by_sigma})"
     texts["evo_deterministic"] = _mean_sem([100 * r.mean_network for r in records if r.sigma == 0])
     card = claims.by_key(evolution_rows(payload.results))
     for j, sigma in enumerate(SIGMAS[1:], 1):
@@ -366,6 +380,7 @@ class Convergence(Record):
     sigma: NonNegative
     seed: Seed
     slope: Finite
+    slope_ci: List[Finite]
 
 
 class EvolutionResults(Record):
