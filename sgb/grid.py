@@ -52,7 +52,7 @@ LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
 # The high end's DGB cells, two hours of one core, went first once and stay there. The
 # populations of the regime's genomes go before its runs: each evaluates a genome that has
 # landed (20-40 min of one core against 2.5 h a run), so a genome is measured as it lands.
-# Chapter 6's evolution, 25 min of one core, went ahead of them once (it answers its
+# Chapter 6's evolution, about 70 min of one core, goes ahead of them (it answers its
 # question in one sitting, against 27 h of the regime's); its bet-hedging genomes (about
 # 8 h) come last.
 QUEUE = (

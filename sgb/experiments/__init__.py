@@ -320,9 +320,9 @@ EXPERIMENTS: dict[str, Experiment] = {
         inputs="digits (Fashion-MNIST at paper); 8 hidden types, 4 spreads, 5 seeds",
         costs={
             "smoke": "2 cells of 20 generations, seconds",
-            "cpu": "20 cells of 3000 generations, about 25 min of one CPU core (1 to 1.5 min "
-            "a cell measured at 2000 generations); resumable, in the background queue",
-            "paper": "Fashion-MNIST, 64 hidden neurons, 12,000 generations; not measured",
+            "cpu": "20 cells of 10,000 generations, about 70 min of one CPU core (1,267 "
+            "CPU-seconds measured at 3000 generations); resumable, in the background queue",
+            "paper": "Fashion-MNIST, 64 hidden neurons, 40,000 generations; not measured",
         },
         results={"": "evolution_digits_cpu.json"},
         record_name="Evolution",
