@@ -241,10 +241,11 @@ def describe(queue: Queue) -> list[str]:
         left += 0.0 if r.finished or remaining is None else remaining
         lines.append(f"  {r.label}: {what}")
     done = sum(r.finished for r in queue.runs)
-    lines.append(
-        f"  {done} of {len(queue.runs)} runs done; about {_hours(left)} of one core left"
-        + ("" if typical else " (no finished run to time the waiting ones by)")
-    )
+    if typical or done == len(queue.runs):
+        still = f"about {_hours(left)} of one core left"
+    else:
+        still = "time left unknown: no finished run to time the waiting ones by"
+    lines.append(f"  {done} of {len(queue.runs)} runs done; {still}")
     return lines
 
 
