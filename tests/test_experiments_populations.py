@@ -3,6 +3,7 @@ variance, its pooling, and a smoke run end to end that resumes without evaluatin
 
 import json
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -19,6 +20,8 @@ from sgb.experiments import (
 from sgb.experiments import populations as population_runs
 from sgb.paths import committed_results
 from sgb.provenance import jsonable, read_results
+from sgb.rl import checkpoints
+from sgb.rl.ppo import TrainResult
 
 
 def _population(rng, n: int, episodes: int, sd_between: float, sd_within: float, mean=10.0):
@@ -214,7 +217,7 @@ def test_the_authors_one_sample_t_leaves_out_the_mean_networks_error_and_welch_c
     assert welch["t"] == pytest.approx(welch["estimate"] / se)
 
 
-def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains():
+def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains(tmp_path):
     config = populations.REGIME_PROFILES["cpu"]
     labels = [populations.genome_label(g) for g in config.genomes]
     assert labels[:2] == ["ant_regime_k128_s0", "ant_regime_k16_s0"] and len(labels) == 13
@@ -226,15 +229,25 @@ def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains
     assert populations.checkpoint_path(k64, config) == (
         "rl/checkpoints/ant_regime_k64_s0_cpu.msgpack"
     )
-    # the committed 64-type seed-0 checkpoint was trained before the regime's fixes: it
-    # waits for the run that replaces it, while the 128 types' finished run is evaluated
+    # a checkpoint under the genome's name from another regime (here: the regime's run as
+    # it was evaluated before, on 256 individuals) waits for the run that replaces it
     results = committed_results()
-    assert (results / populations.checkpoint_path(k64, config)).exists()
-    assert not populations.landed(k64, config, results)
+    assert populations.landed(k64, config, results)
     assert populations.landed(k128, config, results)
+    ppo, params, normalizer, meta = checkpoints.load(
+        results / populations.checkpoint_path(k64, config)
+    )
+    older = replace(ppo, eval_individuals=256)
+    assert not older.trains_as(ppo)
+    checkpoints.save(
+        tmp_path / populations.checkpoint_path(k64, config),
+        TrainResult(older, params, normalizer, meta["eval_steps"], meta["eval_returns"], 1.0, 1.0),
+    )
+    assert not populations.landed(k64, config, tmp_path)
     queued = populations.queued("cpu", results)
     assert [r.chunks for r in queued.runs[:2]] == [3, 3]
-    assert "(its training has not landed)" in queued.runs[labels.index("ant_regime_k64_s0")].label
+    waiting = queued.runs[labels.index("ant_regime_k64_s1")].label
+    assert "(its training has not landed)" in waiting
     # the same genome part-way: the state its run keeps after chunk 2, 10^7 steps in
     early = by_label["ant_regime_k64_s0_chunk2"]
     assert populations.checkpoint_path(early, config) == (
