@@ -34,12 +34,13 @@ import signal
 import subprocess
 import sys
 import time
+import traceback
 import warnings
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
-from sgb import cluster, gather, runlock
+from sgb import cluster, gather, recording, runlock
 from sgb.manifest import MAINTAINER_FLAG, add
 from sgb.provenance import atomic_write
 from sgb.queued import Queue
@@ -107,18 +108,26 @@ def become_idle(core: int) -> None:
 def work(core: int, logs: Path, main: Callable[[list[str]], int]) -> int:
     """A worker: idle on ``core``, it runs the queue's experiments in order (each by the
     command line's ``main``), each taking the runs no other worker holds, holding its
-    worker lock meanwhile; an exit status."""
+    worker lock meanwhile. A results file of an earlier design gives way to the run of
+    the new one (``sgb.recording.superseding``); an experiment that fails is logged and
+    the worker goes on to the next. Its exit status: the first failure's, else 0."""
     become_idle(core)
-    with runlock.claim(logs / f"worker-{core}") as mine:
+    failed = 0
+    with runlock.claim(logs / f"worker-{core}") as mine, recording.superseding():
         if not mine:
             print(f"a worker on core {core} is running already", flush=True)
             return 1
         for name, profile in QUEUE:
             print(f"worker {core}: {name} --profile {profile}", flush=True)
-            status = main(["reproduce", name, "--profile", profile, MAINTAINER_FLAG])
+            try:
+                status = main(["reproduce", name, "--profile", profile, MAINTAINER_FLAG])
+            except Exception:  # a fault of one experiment must not idle the queue
+                traceback.print_exc()
+                status = 1
             if status:
-                return status
-    return 0
+                print(f"worker {core}: {name} failed (status {status}); next", flush=True)
+                failed = failed or status
+    return failed
 
 
 def workers(tree: Path) -> dict[int, int]:

@@ -12,10 +12,11 @@ An experiment made of parts (cells, chunks, runs, each a record with its own
 their sum, whenever each part ran, and ``git_commits`` lists the commits that made them.
 """
 
+import contextlib
 import dataclasses
 import json
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Generic, TypeVar
 
@@ -64,11 +65,50 @@ def _holds_the_same(path: str | Path, payload: dict[str, Any]) -> bool:
     return all(before.get(key) == now.get(key) for key in SAME_RUN_FIELDS)
 
 
+_superseding = False  # set by ``superseding``
+
+
+@contextlib.contextmanager
+def superseding() -> Iterator[None]:
+    """Within it, a run whose results file holds the results of another config deletes
+    that file and starts afresh, where it would otherwise refuse: the background queue's
+    workers run so (``sgb.grid.work``), in a worktree where git keeps the committed file,
+    so that a run of a new design replaces the file of the old one when it lands."""
+    global _superseding
+    before, _superseding = _superseding, True
+    try:
+        yield
+    finally:
+        _superseding = before
+
+
 def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
     """The results an earlier run of ``config`` left in ``path`` (empty if there is no file),
-    so that a rerun continues it; a ValueError if a run of another config wrote the file, a
-    ``sgb.validation.CorruptFile`` if it is not a results file with a config or, in the
-    committed results, not the file its run wrote (``sgb.manifest.verify``)."""
+    so that a rerun continues it; a ValueError if a run of another config wrote the file
+    (outside ``superseding``), a ``sgb.validation.CorruptFile`` if it is not a results file
+    with a config or, in the committed results, not the file its run wrote
+    (``sgb.manifest.verify``)."""
+    results = _results_of(path, config)
+    if results is not None:
+        return results
+    if not _superseding:
+        raise ValueError(f"{path} holds results of another config; move it away to run this one")
+    print(f"{path} holds results of another config: deleted, this run starts afresh", flush=True)
+    Path(path).unlink()
+    return {}
+
+
+def held_results(path: str | Path, config: Any) -> dict[str, Any]:
+    """``earlier_results``, but ``{}`` where a run of another config wrote ``path``: for a
+    listing of the runs still to do (``queued``), which a file of an earlier design must
+    not stop."""
+    results = _results_of(path, config)
+    return {} if results is None else results
+
+
+def _results_of(path: str | Path, config: Any) -> dict[str, Any] | None:
+    """The results in ``path`` of a run of ``config`` (``{}`` without the file, ``None``
+    where a run of another config wrote it); a CorruptFile as ``earlier_results`` says."""
     if not Path(path).exists():
         return {}
     payload = read_results(path)
@@ -80,18 +120,8 @@ def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
     if "config" not in payload["provenance"]:
         raise CorruptFile(path, "has no config in its provenance", RESTART, "results file")
     if payload["provenance"]["config"] != json.loads(json.dumps(jsonable(config))):
-        raise ValueError(f"{path} holds results of another config; move it away to run this one")
+        return None
     return payload["results"]
-
-
-def held_results(path: str | Path, config: Any) -> dict[str, Any]:
-    """``earlier_results``, but ``{}`` where a run of another config wrote ``path``: for a
-    listing of the runs still to do (``queued``), which a file of an earlier design must
-    not stop."""
-    try:
-        return earlier_results(path, config)
-    except ValueError:
-        return {}
 
 
 Config = TypeVar("Config")

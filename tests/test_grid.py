@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from interrupt import killed_at_chunk
 
-from sgb import grid, runlock
+from sgb import grid, recording, runlock
 from sgb.experiments import regime
 from sgb.rl import checkpoints, regime_runs
 from sgb.rl.trainer import make_trainer
@@ -43,6 +43,26 @@ def test_a_worker_runs_at_idle_priority_on_its_own_core():
         start_new_session=True,
     )
     assert done.stdout.split(maxsplit=2) == ["True", "19", f"[{core}]\n"]
+
+
+def test_a_worker_goes_on_past_a_failing_experiment_and_supersedes_old_designs(
+    tmp_path, monkeypatch
+):
+    """Every experiment of the queue runs, in order, with files of an earlier design giving
+    way; the worker's status is the first failure's."""
+    ran = []
+
+    def main(argv):
+        ran.append((argv[1], recording._superseding))
+        if argv[1] == "broken":
+            raise RuntimeError("a fault")
+        return 3 if argv[1] == "refused" else 0
+
+    monkeypatch.setattr(grid, "become_idle", lambda core: None)
+    monkeypatch.setattr(grid, "QUEUE", (("broken", "cpu"), ("refused", "cpu"), ("fine", "cpu")))
+    assert grid.work(0, tmp_path, main) == 1
+    assert ran == [("broken", True), ("refused", True), ("fine", True)]
+    assert not recording._superseding
 
 
 def test_the_holder_of_a_run_is_read_without_taking_its_lock(tmp_path):

@@ -5,7 +5,7 @@ import dataclasses
 import pytest
 
 from sgb.provenance import read_results
-from sgb.recording import held_results, start
+from sgb.recording import held_results, start, superseding
 
 
 @dataclasses.dataclass(frozen=True)
@@ -51,6 +51,13 @@ def test_parts_give_the_wall_time_and_commits_and_a_rerun_resumes(tmp_path):
     # a listing of what is still to do reads a file of another design as nothing done
     assert held_results(recording.path, Toy("digits", 6)) == {}
     assert held_results(recording.path, Toy("digits", 5)) == {"parts": parts}
+    # the queue's workers replace it: the run of the new design starts afresh
+    with superseding():
+        assert held_results(recording.path, Toy("digits", 6)) == {}
+        assert recording.path.exists()  # a listing never deletes
+        assert other.earlier() == {}
+    assert not recording.path.exists()
+    assert again.earlier() == {}
 
 
 def test_a_run_without_parts_is_timed_from_its_start(tmp_path):

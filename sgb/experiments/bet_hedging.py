@@ -310,10 +310,14 @@ def hedging_config(profile: str) -> HedgingConfig:
 PROFILES = {p: hedging_config(p) for p in PROFILE_NAMES}
 
 
-def _setting(rho: float, genomes: list, q: str, k: str) -> str:
+def _setting(rho: float, genomes: list, survival: tuple[str, str] | None = None) -> str:
+    """The spread's row setting; with ``survival`` = (q, k), the criterion too."""
     sigma = np.mean([g.sigma_trained for g in genomes])
-    role = "declared in advance" if (q, k) == PRIMARY else "secondary"
-    return f"rho from {rho:g} (trained sigma {sigma:.2g}), at least {k} survive ({role})"
+    spread = f"rho from {rho:g} (trained sigma {sigma:.2g})"
+    if survival is None:
+        return spread
+    role = "declared in advance" if survival == PRIMARY else "secondary"
+    return f"{spread}, at least {survival[1]} survive ({role})"
 
 
 def bet_hedging_rows(results: "BetHedgingResults") -> list[Row]:
@@ -337,19 +341,19 @@ def bet_hedging_rows(results: "BetHedgingResults") -> list[Row]:
                 g.scores.individuals.p_retested[q][each] - g.scores.clones.p_retested[q][each]
                 for g in genomes
             ]
-            setting = _setting(rho, genomes, q, each)
+            setting = _setting(rho, genomes, (q, each))
             rows.append(_across_genomes("ch6.hedging_survival", setting, survival, budget))
         geometric = [
             g.scores.individuals.geometric_fitness - g.scores.clones.geometric_fitness
             for g in genomes
         ]
-        setting = _setting(rho, genomes, q, k).split(", at least")[0]
+        setting = _setting(rho, genomes)
         rows.append(_across_genomes("ch6.hedging_geometric", setting, geometric, budget))
         if len(lineage) >= 2:
             ours = [g.scores.individuals.p_retested[q][k] for g in genomes]
             theirs = [g.scores.individuals.p_retested[q][k] for g in lineage]
             lineage_budget = f"{budget}; the lineage {len(lineage)} genomes"
-            rows.append(_lineage_row(_setting(rho, genomes, q, k), ours, theirs, lineage_budget))
+            rows.append(_lineage_row(_setting(rho, genomes, PRIMARY), ours, theirs, lineage_budget))
     return rows
 
 
