@@ -94,7 +94,7 @@ def earlier_results(path: str | Path, config: Any) -> dict[str, Any]:
     if not _superseding:
         raise ValueError(f"{path} holds results of another config; move it away to run this one")
     print(f"{path} holds results of another config: deleted, this run starts afresh", flush=True)
-    Path(path).unlink()
+    Path(path).unlink(missing_ok=True)  # another worker may have deleted it first
     return {}
 
 
