@@ -32,6 +32,7 @@ CLAIMS: tuple[tuple[str, ...], ...] = (
     ("fig2.cifar",),
     ("fig3.level_128.regime.ant", "fig3.level_128.ant", "fig3.level_128.halfcheetah"),
     ("fig3.fall_16.regime.ant", "fig3.fall_16.ant", "fig3.fall_16.halfcheetah"),
+    ("fig3.shape_32.regime.ant", "fig3.shape_32.ant", "fig3.shape_32.halfcheetah"),
     ("ch5.typing_explains_fall",),
     ("fig4e.r_legs",),
     ("fig4f.r_terrain",),

@@ -9,7 +9,7 @@ rule that turns a test into a verdict is ``sgb.verdicts``.
 """
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import NamedTuple
 
 import numpy as np
@@ -99,9 +99,24 @@ def welch(a, b) -> Test:
     a, b = validation.sample("a", a), validation.sample("b", b)
     if np.ptp(a) == 0 and np.ptp(b) == 0:
         raise ValueError("a and b are both constant, so the statistic is undefined")
-    va, vb = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
-    dof = (va + vb) ** 2 / (va**2 / (a.size - 1) + vb**2 / (b.size - 1))
-    return _t_test("Welch t", a.mean() - b.mean(), math.sqrt(va + vb), dof, min(a.size, b.size), 0)
+    return contrast([a, b], [1.0, -1.0])._replace(name="Welch t")
+
+
+def contrast(samples: Sequence, weights: Sequence[float]) -> Test:
+    """The linear contrast sum_i w_i mean(sample_i) of independent samples (each of 2 or
+    more values, not all constant), its standard error sqrt(sum_i w_i^2 var_i / n_i) and
+    Welch-Satterthwaite degrees of freedom; ``welch(a, b)`` is the contrast (1, -1). ``n``
+    is the smallest sample's size."""
+    if len(samples) != len(weights) or len(samples) < 2:
+        raise ValueError(f"need one weight per sample, 2 or more: {len(samples)}, {len(weights)}")
+    xs = [validation.sample(f"sample {i}", x) for i, x in enumerate(samples)]
+    w = [validation.real(f"weight {i}", v) for i, v in enumerate(weights)]
+    if all(np.ptp(x) == 0 for x in xs):
+        raise ValueError("every sample is constant, so the statistic is undefined")
+    terms = [wi**2 * x.var(ddof=1) / x.size for wi, x in zip(w, xs, strict=True)]
+    dof = sum(terms) ** 2 / sum(t**2 / (x.size - 1) for t, x in zip(terms, xs, strict=True))
+    estimate = sum(wi * x.mean() for wi, x in zip(w, xs, strict=True))
+    return _t_test("contrast t", estimate, math.sqrt(sum(terms)), dof, min(x.size for x in xs), 0)
 
 
 def paired(a, b) -> Test:

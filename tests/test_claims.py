@@ -18,11 +18,14 @@ from sgb.reliability import (
 )
 
 
-def _sweep(fall: float, seeds: int, rng, level: float = 3000.0) -> list:
+def _sweep(
+    fall: float, seeds: int, rng, level: float = 3000.0, middle: float | None = None
+) -> list:
     """Synthetic Figure 3 runs: vanilla at 4000, 128 types at ``level``, 16 at ``level`` -
-    fall x 4000, seed SD 400."""
+    fall x 4000, and with ``middle`` 32 types there; seed SD 400."""
     runs = []
-    for k, mean in ((None, 4000.0), (128, level), (16, level - fall * 4000)):
+    arms = ((None, 4000.0), (128, level), (16, level - fall * 4000))
+    for k, mean in arms + (((32, middle),) if middle is not None else ()):
         for seed in range(seeds):
             value = float(rng.normal(mean, 400))
             runs.append(
@@ -57,6 +60,26 @@ def test_figure3_verdicts_on_sweeps_with_known_falls():
     assert {r.budget.split(", 128")[0] for r in rows} == {
         f"2M steps, seeds: vanilla 10 (at {vanilla / 8000:.2f} of the authors' scale)"
     }
+
+
+def test_the_falls_shape_on_sweeps_with_a_known_bend():
+    """The drop from 32 to 16 types less the drop from 128 to 32, in fractions of vanilla:
+    0.4 where the 32-type agents stay near the 128's and 0 for a straight decline."""
+    rng = np.random.default_rng(8)
+
+    def shape(middle: float, seeds: int) -> claims.Row:
+        runs = _sweep(0.5, seeds, rng, middle=middle)
+        (row,) = [r for r in claims.figure3_rows(runs, "ant", 2e6) if "shape" in r.key]
+        return row
+
+    bent = shape(2800.0, 10)  # (2800 - 1000) - (3000 - 2800) = 1600, 0.4 of vanilla
+    assert bent.key == "fig3.shape_32.ant" and bent.verdict in verdicts.IN_DIRECTION
+    assert bent.test.low < 0.4 < bent.test.high
+    assert bent.budget.endswith("128 types 10, 16 types 10, 32 types 10")
+    assert shape(2000.0, 40).verdict == verdicts.CONTRADICTED  # a straight line
+    assert not [
+        r for r in claims.figure3_rows(_sweep(0.5, 10, rng), "ant", 2e6) if "shape" in r.key
+    ]
 
 
 def test_a_fall_from_an_arm_near_the_floor_has_no_room_to_show_the_papers():

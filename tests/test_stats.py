@@ -23,6 +23,29 @@ def test_welch_agrees_with_scipy_and_its_interval_covers_the_truth():
     assert 0.935 <= covered / 2000 <= 0.965
 
 
+def test_a_contrast_of_three_arms_covers_its_truth_and_welch_is_its_two_arm_case():
+    rng = np.random.default_rng(12)
+    a, b = rng.normal(1.0, 1.0, 7), rng.normal(0.0, 2.0, 11)
+    assert stats.contrast([a, b], [1.0, -1.0])._replace(name="Welch t") == stats.welch(a, b)
+    means, sds, sizes, w = (0.9, 0.7, 0.2), (0.1, 0.3, 0.05), (3, 5, 4), (-1.0, 2.0, -1.0)
+    truth = float(np.dot(w, means))  # 0.3
+    arms = [rng.normal(m, sd, n) for m, sd, n in zip(means, sds, sizes, strict=True)]
+    test = stats.contrast(arms, w)
+    se = math.sqrt(sum(wi**2 * x.var(ddof=1) / x.size for wi, x in zip(w, arms, strict=True)))
+    assert test.estimate == pytest.approx(float(np.dot(w, [x.mean() for x in arms])))
+    assert (test.high - test.low) / 2 == pytest.approx(scipy_stats.t(test.dof).ppf(0.975) * se)
+    assert test.n == 3
+    covered = 0
+    for _ in range(2000):
+        t = stats.contrast(
+            [rng.normal(m, sd, n) for m, sd, n in zip(means, sds, sizes, strict=True)], w
+        )
+        covered += t.low <= truth <= t.high
+    assert 0.935 <= covered / 2000 <= 0.965
+    with pytest.raises(ValueError, match="one weight per sample"):
+        stats.contrast(arms, w[:2])
+
+
 def test_the_detectable_effect_has_80_percent_power():
     """At the detectable effect of a design, the test finds the effect 80 % of the time,
     and units_to_decide gives the sample size at which a smaller effect is detectable."""

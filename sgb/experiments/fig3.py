@@ -16,6 +16,7 @@ import pandas as pd
 from sgb import stats, verdicts
 from sgb.claims import (
     CLAIMS,
+    FIG3_KEYS,
     Row,
     figure3_rows,
     judge,
@@ -226,16 +227,18 @@ def _vanilla(prefix: str, payload: "Fig3") -> dict[str, str]:
 
 
 def _level_and_fall(prefix: str, env: str, card: Card) -> dict[str, str]:
-    """Figure 3's level at 128 types and fall to 16 types on ``env``, per genome settings
-    (``{prefix}level_ours_*``, ...), each with ``_power``: the power to detect 0.3."""
+    """Figure 3's level at 128 types, fall to 16 types and the fall's shape on ``env``,
+    per genome settings (``{prefix}level_ours_*``, ``{prefix}shape_ours_*``, ...), each
+    with ``_power``: the power to detect its claim's effect (0.3 of vanilla for the level
+    and the fall, the paper's reading of "falls off quickly")."""
     texts = {}
     for who, settings in GENOMES:
-        for what in ("level", "fall"):
-            key = f"fig3.level_128.{env}" if what == "level" else f"fig3.fall_16.{env}"
-            row = row_of(card, key, who)
+        for what, key in FIG3_KEYS.items():
+            row = row_of(card, f"{key}.{env}", who)
             name = f"{prefix}{what}_{settings}"
             texts |= row_texts(name, row)
-            power = None if row is None or row.test is None else stats.power_at(row.test, 0.3)
+            effect = 0.3 if what != "shape" else CLAIMS[f"{key}.{env}"].paper_effect
+            power = None if row is None or row.test is None else stats.power_at(row.test, effect)
             texts[f"{name}_power"] = NOT_RUN if power is None else f"{power:.0%}"
     return texts
 

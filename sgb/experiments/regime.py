@@ -213,15 +213,17 @@ def regime(payload: "Regime") -> dict[str, str]:
     final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
     on the authors' scale, its mean env-steps/s and wall time per run (``regime_*``),
     ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds, and the
-    scorecard's rows of the level at 128 types and the fall to 16 with the authors' genome
-    (``regime_level``, ``regime_fall``: estimate, interval and verdict; "no row yet" while
-    an arm they compare has one seed)."""
+    scorecard's rows of the level at 128 types, the fall to 16 and the fall's shape with
+    the authors' genome (``regime_level``, ``regime_fall``, ``regime_shape``: estimate,
+    interval and verdict; "no row yet" while an arm they compare has one seed)."""
     runs, summary = payload.results.runs, payload.results.summary
     card = claims.by_key(regime_rows(runs, trained_steps(payload)))
     genome = claims.REGIME_SETTINGS["authors"]
     texts = {}
-    for name, key in (("level", "fig3.level_128.regime.ant"), ("fall", "fig3.fall_16.regime.ant")):
-        row = next((r for r in card.get(key, []) if r.setting.endswith(genome)), None)
+    for name, stem in claims.FIG3_KEYS.items():
+        row = next(
+            (r for r in card.get(f"{stem}.regime.ant", []) if r.setting.endswith(genome)), None
+        )
         found = row_texts("row", row)
         texts[f"regime_{name}"] = (
             "no row yet (an arm it compares has one seed)"
