@@ -267,7 +267,8 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
     (``evo_slopes``), the runs still rising by more than ``RISING`` (``evo_rising``), and
     per spread j of ``SIGMAS`` past 0 its sigma (``evo_s{j}``), its
     individuals' test accuracy (``evo_s{j}_individuals``), how much they differ
-    (``evo_s{j}_split``: the variance split, medians over seeds) and its row of
+    (``evo_s{j}_split``: the runs whose individuals differ by the F-test, and the variance
+    split's medians over seeds) and its row of
     ``evolution_rows`` (``evo_s{j}_*``); ``NOT_RUN`` for all without the file."""
     texts = {"evo_design": NOT_RUN, "evo_deterministic": NOT_RUN, "evo_slopes": NOT_RUN}
     texts["evo_rising"] = NOT_RUN
@@ -302,15 +303,21 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
             continue
         texts[f"evo_s{j}_individuals"] = _mean_sem([100 * np.mean(r.individuals) for r in cells])
         splits = [r.variance_split for r in cells]
+        differ = sum(v.p < 0.05 for v in splits)
+        between, within = (100 * np.median([getattr(v, f) for v in splits]) for f in SDS)
         texts[f"evo_s{j}_split"] = (
-            f"individuals differ by an SD of {100 * np.median([v.between_sd for v in splits]):.1f} "
-            f"points, against {100 * np.median([v.within_sd for v in splits]):.1f} between "
-            f"parts of the test set (ICC {np.median([v.icc for v in splits]):.2f})"
+            f"its individuals differ measurably (F-test, p < 0.05) in {differ} of "
+            f"{len(splits)} runs, by an SD of {between:.1f} points, against {within:.1f} "
+            f"between parts of the test set (ICC {np.median([v.icc for v in splits]):.2f}; "
+            "medians over the runs)"
         )
         texts |= row_texts(
             f"evo_s{j}", row_of(card, "ch6.evolution_stochastic_helps", f"sigma {sigma:g}")
         )
     return texts
+
+
+SDS = ("between_sd", "within_sd")  # a variance split's two SDs, in accuracy units
 
 
 def _mean_sem(values: list[float]) -> str:
