@@ -52,6 +52,32 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
     assert texts["regime_fall"].startswith("no row yet")
 
 
+def test_a_runs_sigma_course_is_its_recorded_kernels_and_the_chapter_says_its_change():
+    """Evaluations that recorded no spreads and the biases are left out; the committed
+    64-type seed-0 run recorded all 11, from softplus(rho) near 0.0009 at step 0 down."""
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
+    run = next(r for r in regime["results"]["runs"] if r["cell_types"] is not None)
+    sigmas = [
+        None,
+        {"h": 2e-3, "h/bias": 9.0, "out": 4e-3},
+        {"h": 1e-3, "h/bias": 9.0, "out": 3e-3},
+    ]
+    made = {**run, "eval_steps": [0, 10, 20], "eval_sigmas": sigmas}
+    steps, sigma, names = regime_runs.sigma_course(regime_runs.RegimeRun.model_validate(made))
+    assert steps.tolist() == [10, 20] and names == ["h", "out"]
+    assert sigma.tolist() == [[2e-3, 4e-3], [1e-3, 3e-3]]
+    once = {**made, "eval_sigmas": [None, None, sigmas[2]]}
+    assert regime_runs.sigma_course(regime_runs.RegimeRun.model_validate(once)) is None
+    committed = RECORDS("regime")
+    (k64,) = [r for r in committed.results.runs if (r.cell_types, r.seed) == (64, 0)]
+    steps, sigma, names = regime_runs.sigma_course(k64)
+    assert steps[0] == 0 and len(steps) == 11 and sigma.shape == (11, len(names))
+    assert sigma[0].mean() == pytest.approx(float(genome.softplus(-7.0)), rel=0.05)
+    change = f"({sigma[-1].mean() / sigma[0].mean() - 1:+.0%})"
+    text = regime_runs.sigma_courses(committed)["regime_sigma_course"]
+    assert f"64 types seed 0, {sigma[0].mean():.2g} at step 0 to " in text and change in text
+
+
 def test_a_smoke_regime_records_each_sgb_runs_spreads_against_its_means(tmp_path):
     """A smoke regime run writes, for its SGB run, each layer's mean sigma and mean |mu|
     as its checkpoint's actor holds them: at 320 steps sigma is still near its birth,

@@ -158,6 +158,40 @@ def spreads(payload: "Regime") -> dict[str, str]:
     }
 
 
+def sigma_course(run: "RegimeRun") -> tuple[np.ndarray, np.ndarray, list[str]] | None:
+    """The recorded course of ``run``'s spreads: (env steps (n,), the mean sigma of each SGB
+    kernel (n, layers), the layers' names), over the n >= 2 evaluations that recorded
+    them, the biases left out; None for a run with fewer."""
+    kept = [(s, d) for s, d in zip(run.eval_steps, run.eval_sigmas or [], strict=False) if d]
+    if len(kept) < 2:
+        return None
+    names = [name for name in kept[0][1] if not name.endswith("/bias")]
+    steps = np.array([s for s, _ in kept], dtype=float)
+    return steps, np.array([[d[name] for name in names] for _, d in kept]), names
+
+
+def sigma_courses(payload: "Regime") -> dict[str, str]:
+    """How the spreads moved over training (``regime_sigma_course``), per SGB run that
+    recorded them (``sigma_course``): its kernels' mean sigma at its first recorded
+    evaluation and at its last, and the change; ``NOT_RUN`` where no run recorded two."""
+    found = []
+    for run in payload.results.runs:
+        course = sigma_course(run) if run.cell_types is not None else None
+        if course is None:
+            continue
+        steps, sigma, _ = course
+        first, last = sigma[0].mean(), sigma[-1].mean()
+        found.append(
+            f"{run.cell_types} types seed {run.seed}, {first:.2g} at {_millions(steps[0])} to "
+            f"{last:.2g} at {_millions(steps[-1])} ({last / first - 1:+.0%})"
+        )
+    return {"regime_sigma_course": "; ".join(found) or NOT_RUN}
+
+
+def _millions(steps: float) -> str:
+    return "step 0" if steps == 0 else f"{steps / 1e6:.3g}M steps"
+
+
 def summarise_regime(runs: list[dict]) -> list[dict]:
     """Per genome and cell-type count (vanilla first): seeds, mean final return and SEM,
     mean on the authors' scale, and the fraction of vanilla over the seeds that have a
@@ -258,9 +292,10 @@ def evidence(records: Records) -> list[Row]:
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
-    """What chapter 5 glues of the regime's runs (``regime``, ``spreads``)."""
+    """What chapter 5 glues of the regime's runs (``regime``, ``spreads``,
+    ``sigma_courses``)."""
     payload = records("regime")
-    return regime(payload) | spreads(payload)
+    return regime(payload) | spreads(payload) | sigma_courses(payload)
 
 
 REGIME_COLUMNS = {
@@ -291,6 +326,9 @@ class LayerSpread(Record):
 class RegimeRun(Training):
     genome: str
     layers: MaybeEmpty[LayerSpread] | None = None  # an SGB run's, once written with them
+    # per evaluation, the actor's mean sigma per SGB layer (``sgb.genome.layer_sigmas``),
+    # None for an evaluation made before runs recorded it; absent from older runs
+    eval_sigmas: List[dict[str, Positive] | None] | None = None
     authors_scale: Finite
     train_steps_per_s: Positive
     wall_time_s: Seconds

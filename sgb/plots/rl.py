@@ -98,6 +98,32 @@ def plot_regime(runs: list[Training], env: str = "ant", ax=None):
     return ax
 
 
+def plot_sigma_courses(courses: dict[str, tuple], ax=None):
+    """How the spreads moved over training: for each run (its name -> ``(env steps (n,),
+    mean sigma per kernel (n, layers), the layers' names)``, as
+    ``sgb.experiments.regime.sigma_course`` gives them) one colour, one line style per
+    layer."""
+    ax = axes_or_new(ax)
+    styles = ("-", "--", ":", "-.")
+    for (name, (steps, sigma, layers)), color in zip(
+        courses.items(), sns.color_palette("colorblind", len(courses)), strict=True
+    ):
+        for j, layer in enumerate(layers):
+            ax.plot(
+                np.asarray(steps) / 1e6,
+                np.asarray(sigma)[:, j],
+                marker="o",
+                ms=3,
+                color=color,
+                ls=styles[j % len(styles)],
+                label=f"{name}, {layer}",
+            )
+    ax.set_xlabel("env steps (millions)")
+    ax.set_ylabel("mean sigma of the layer's type pairs")
+    ax.legend(fontsize=7, ncol=2)
+    return ax
+
+
 def plot_pair(x, y, a: str, b: str, mean_network=None, ax=None):
     """Each individual's mean return on condition ``a`` vs ``b`` (``x``, ``y``: the
     individuals' returns, individuals x episodes, on each), SEM over episodes as bars, with
