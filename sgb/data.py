@@ -390,6 +390,25 @@ DATASETS: dict[str, Callable[..., Dataset]] = {
 }
 
 
+# each dataset's example shape and class count, as its loader gives them (a test checks):
+# what a listing of the cells to train needs, without the data
+SHAPES: dict[str, tuple[tuple[int, ...], int]] = {
+    "digits": ((64,), 10),
+    "mnist1d": ((40,), 10),
+    "mnist": ((784,), 10),
+    "fashion-mnist": ((784,), 10),
+    "cifar10": ((32, 32, 3), 10),
+}
+
+
+def shape_of(name: str) -> tuple[tuple[int, ...], int]:
+    """(the shape of one example, the number of classes) of the dataset ``name``, without
+    loading it."""
+    if not isinstance(name, str) or name not in SHAPES:
+        raise ValueError(f"unknown dataset name {name!r}; available: {sorted(DATASETS)}")
+    return SHAPES[name]
+
+
 def load(name: str, seed: int = 0) -> Dataset:
     """Load a dataset by name: digits, mnist1d (offline), fashion-mnist (Debian package or
     downloaded once), mnist, cifar10 (downloaded once)."""

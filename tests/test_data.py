@@ -63,6 +63,7 @@ def test_mnist_loads_written_idx_files(tmp_path, monkeypatch):
     arrays = _write_mnist(tmp_path, np.random.default_rng(0), monkeypatch)
     ds = data.mnist(directory=tmp_path)
     assert ds.x_train.shape == (12, 784) and ds.x_test.shape == (5, 784)
+    assert data.shape_of("mnist") == (ds.x_train.shape[1:], ds.num_classes)
     assert ds.x_train.dtype == np.float32 and ds.y_train.dtype == np.int32
     np.testing.assert_array_equal(ds.y_test, arrays["test_labels"])
     # global standardisation by the training set keeps the pixel order
@@ -142,6 +143,7 @@ def test_cifar10_parses_written_tarball(tmp_path, monkeypatch):
     assert y_tr.tolist() == sum((batches[f"data_batch_{i}"][1] for i in range(1, 6)), [])
     ds = data.cifar10(directory=tmp_path)
     assert ds.x_train.shape == (15, 32, 32, 3) and ds.num_classes == 10
+    assert data.shape_of("cifar10") == (ds.x_train.shape[1:], ds.num_classes)
     np.testing.assert_allclose(ds.x_train.mean(axis=(0, 1, 2)), 0.0, atol=1e-4)
 
 
@@ -193,6 +195,13 @@ def test_offline_datasets_shapes():
     ds = data.load("digits")
     assert ds.x_train.shape[1] == 64 and len(ds.x_train) + len(ds.x_test) == 1797
     np.testing.assert_allclose(ds.x_train.mean(axis=0), 0.0, atol=1e-5)
+    # the table that lists cells without the data gives each loader's shapes
+    for name in data.OFFLINE_DATASETS:
+        ds = data.load(name)
+        assert data.shape_of(name) == (ds.x_train.shape[1:], ds.num_classes)
+    assert set(data.SHAPES) == set(data.DATASETS)
+    with pytest.raises(ValueError, match="available"):
+        data.shape_of("imagenet")
 
 
 def test_features_constant_on_the_training_set_stay_bounded():
@@ -213,6 +222,7 @@ def test_features_constant_on_the_training_set_stay_bounded():
 def test_installed_fashion_mnist_passes_its_checks():
     ds = data.load("fashion-mnist")
     assert ds.x_train.shape == (60_000, 784) and ds.x_test.shape == (10_000, 784)
+    assert data.shape_of("fashion-mnist") == (ds.x_train.shape[1:], ds.num_classes)
     np.testing.assert_array_equal(ds.y_train[:10], [9, 0, 0, 3, 0, 2, 7, 2, 5, 5])
 
 

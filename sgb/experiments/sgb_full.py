@@ -44,7 +44,7 @@ from sgb.claims import (
     welch_table,
 )
 from sgb.classifiers import dense_sizes
-from sgb.data import Dataset, load
+from sgb.data import load, shape_of
 from sgb.profiles import check_profile
 from sgb.prose import NOT_RUN, Card, row_of, row_texts
 from sgb.provenance import read_results, results_file
@@ -157,10 +157,11 @@ def _cells(full: FullSGBSweep, sizes: tuple[int, ...]) -> list[tuple[str, tuple[
     return [(v, cell) for v in full.variants for cell in sweep_cells(full.of(v), sizes)]
 
 
-def layer_sizes(full: FullSGBSweep, data: Dataset) -> tuple[int, ...]:
-    """The dense layer sizes of ``full``'s networks on ``data``."""
+def layer_sizes(full: FullSGBSweep) -> tuple[int, ...]:
+    """The dense layer sizes of ``full``'s networks on its dataset."""
     sweep = full.sweep
-    return dense_sizes(data.x_train.shape[1:], sweep.conv_features, sweep.hidden, data.num_classes)
+    example, classes = shape_of(full.dataset)
+    return dense_sizes(example, sweep.conv_features, sweep.hidden, classes)
 
 
 def train(recording: Recording, progress: bool = True) -> Path:
@@ -168,7 +169,7 @@ def train(recording: Recording, progress: bool = True) -> Path:
     holds and no run has finished, adding each to its results file as it finishes."""
     full, path = recording.config, recording.path
     data = load(full.dataset, seed=0)
-    sizes = layer_sizes(full, data)
+    sizes = layer_sizes(full)
 
     def name(variant: str, cell: tuple[str, int, int]) -> str:
         return cell_name(variant, *cell[1:])
@@ -209,7 +210,7 @@ def queued_high(profile: str, results_dir: Path) -> Queue:
     full = HIGH_PROFILES[check_profile(profile)]
     path = results_file(results_dir, _stem("sgb_high")(full), profile)
     done = read_results(path)["results"]["cells"] if path.exists() else {}
-    sizes = layer_sizes(full, load(full.dataset, seed=0))
+    sizes = layer_sizes(full)
     runs = []
     for variant, (_, setting, seed) in _cells(full, sizes):
         name = cell_name(variant, setting, seed)

@@ -25,7 +25,7 @@ from sgb.cells import train_cells
 from sgb.claims import Row, judge
 from sgb.classifiers import dense_sizes
 from sgb.compression import compression
-from sgb.data import load
+from sgb.data import load, shape_of
 from sgb.dgb import DGBConfig
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card, row_texts
@@ -150,9 +150,8 @@ def queued(profile: str, results_dir: Path) -> Queue:
     done = {
         _record_key(r): r for r in (read_results(path)["results"]["cells"] if path.exists() else [])
     }
-    data = load(config.dataset, seed=0)
     runs = []
-    for width, (model, _, seed) in _cells(config, data.x_train.shape[1:], data.num_classes):
+    for width, (model, _, seed) in _cells(config, *shape_of(config.dataset)):
         key = _key(width, model, seed)
         label = f"{model.upper()} width {width} seed {seed}"
         runs.append(file_run(label, path, key, done.get(key)))
