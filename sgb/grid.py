@@ -40,10 +40,12 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
+import pandas as pd
+
 from sgb import cluster, gather, recording, runlock
 from sgb.manifest import MAINTAINER_FLAG, add
 from sgb.provenance import atomic_write
-from sgb.queued import Queue
+from sgb.queued import Queue, QueuedRun
 
 REPOSITORY = Path(__file__).resolve().parent.parent  # the checkout this package lies in
 GRID_ENV = "SGB_GRID"
@@ -227,19 +229,34 @@ def time_left(per_chunk: float, chunks_left: int, into_chunk: float) -> float:
     return per_chunk * (chunks_left - 1) + max(per_chunk - into_chunk, 0.0)
 
 
+def _typical_s(queue: Queue) -> float | None:
+    """The mean wall time (s) of ``queue``'s finished runs, None where none is timed."""
+    times = [r.wall_time_s for r in queue.runs if r.finished and r.wall_time_s]
+    return sum(times) / len(times) if times else None
+
+
+def run_left_s(run: QueuedRun, typical_s: float | None, into_chunk: float = 0.0) -> float | None:
+    """Seconds ``run`` has left (0 once finished): its own chunks' pace where it has
+    finished one, else the typical finished run's (``typical_s``); None where neither
+    times it. ``into_chunk``: seconds already spent on its current chunk."""
+    if run.finished:
+        return 0.0
+    chunk = run.chunks_done
+    per_chunk = run.spent_s / chunk if chunk else (typical_s / run.chunks if typical_s else None)
+    return None if per_chunk is None else time_left(per_chunk, run.chunks - chunk, into_chunk)
+
+
 def describe(queue: Queue) -> list[str]:
     """A line per run of ``queue``: done (its wall time), running (its process, chunk and
     ETA), or waiting (where it resumes), and a summary line."""
-    times = [r.wall_time_s for r in queue.runs if r.finished and r.wall_time_s]
-    typical = sum(times) / len(times) if times else None
+    typical = _typical_s(queue)
     lines, left = [], 0.0
     for r in queue.runs:
-        chunk, spent = (0, 0.0) if r.finished else (r.chunks_done, r.spent_s)
-        per_chunk = spent / chunk if chunk else (typical / r.chunks if typical else None)
+        chunk = 0 if r.finished else r.chunks_done
         pid = None if r.finished else runlock.holder(r.checkpoint)
         # a running run is into its current chunk since its state was last written
         into = time.time() - r.state.stat().st_mtime if pid and r.state.exists() else 0.0
-        remaining = None if per_chunk is None else time_left(per_chunk, r.chunks - chunk, into)
+        remaining = run_left_s(r, typical, into)
         if r.finished:
             what = f"done ({_hours(r.wall_time_s)})" if r.wall_time_s else "done"
         elif pid is not None:
@@ -247,7 +264,7 @@ def describe(queue: Queue) -> list[str]:
             what = f"running (pid {pid}): chunk {chunk + 1} of {r.chunks}, {eta}"
         else:
             what = f"waiting (resumes at chunk {chunk + 1})" if chunk else "waiting"
-        left += 0.0 if r.finished or remaining is None else remaining
+        left += remaining or 0.0
         lines.append(f"  {r.label}: {what}")
     done = sum(r.finished for r in queue.runs)
     if typical or done == len(queue.runs):
@@ -256,6 +273,29 @@ def describe(queue: Queue) -> list[str]:
         still = "time left unknown: no finished run to time the waiting ones by"
     lines.append(f"  {done} of {len(queue.runs)} runs done; {still}")
     return lines
+
+
+def progress(results_dir: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> pd.DataFrame:
+    """The long runs' progress in the results under ``results_dir``, one row per
+    experiment of ``queue``: its results file, its runs done, part-way (a kept state) and
+    in all, and the hours of one core the rest should take, estimated as ``describe``
+    does (blank where no finished run times the waiting ones)."""
+    rows = []
+    for name, profile, listed in queues(results_dir, queue):
+        typical = _typical_s(listed)
+        left = [run_left_s(r, typical) for r in listed.runs]
+        known = typical is not None or all(r.finished for r in listed.runs)
+        rows.append(
+            {
+                "experiment": f"{name} --profile {profile}",
+                "results file": listed.results.name,
+                "runs done": sum(r.finished for r in listed.runs),
+                "part-way": sum(not r.finished and r.chunks_done > 0 for r in listed.runs),
+                "runs": len(listed.runs),
+                "one-core hours left": sum(x or 0.0 for x in left) / 3600 if known else None,
+            }
+        )
+    return pd.DataFrame(rows)
 
 
 # --- landing ----------------------------------------------------------------------------

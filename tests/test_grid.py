@@ -98,6 +98,36 @@ def test_a_running_runs_time_left_counts_the_time_into_its_chunk():
     assert grid.time_left(600.0, 0, 50.0) == 0.0
 
 
+def test_the_progress_table_counts_runs_and_times_the_rest_by_their_pace(tmp_path, monkeypatch):
+    """Two runs done (1 h and 0.5 h: 0.75 h typical), one waiting (0.75 h), one at chunk 2
+    of 3 after 1200 s (600 s a chunk, 600 s left): 0.75 h + 1/6 h left; a queue with no
+    finished run has no estimate."""
+    from sgb.queued import Queue, QueuedRun
+
+    def run(label, finished, wall=None, chunks=1, done=0, spent=0.0):
+        path = tmp_path / label
+        return QueuedRun(label, path, path, chunks, finished, wall, done, spent)
+
+    timed = Queue(
+        tmp_path / "a.json",
+        (
+            run("one", True, 3600.0),
+            run("two", True, 1800.0),
+            run("three", False),
+            run("four", False, chunks=3, done=2, spent=1200.0),
+        ),
+    )
+    untimed = Queue(tmp_path / "b.json", (run("five", False),))
+    monkeypatch.setattr(
+        grid, "queues", lambda results, queue: [("a", "cpu", timed), ("b", "cpu", untimed)]
+    )
+    table = grid.progress(tmp_path).set_index("experiment")
+    a, b = table.loc["a --profile cpu"], table.loc["b --profile cpu"]
+    assert (a["runs done"], a["part-way"], a["runs"]) == (2, 1, 4)
+    assert a["one-core hours left"] == pytest.approx(0.75 + 600 / 3600)
+    assert (b["runs done"], b["runs"]) == (0, 1) and np.isnan(b["one-core hours left"])
+
+
 def _curve(results: Path, name: str) -> tuple[list[float], list[np.ndarray]]:
     """The learning curve and parameters of checkpoint ``name`` under ``results``."""
     _, params, _, meta = checkpoints.load(results / "rl" / "checkpoints" / name)
