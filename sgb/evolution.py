@@ -36,7 +36,8 @@ class EvolutionConfig:
     ``candidates`` genomes per generation (even), each scored by ``individuals`` developed
     networks on a batch of ``batch_size`` training examples each, for ``generations``;
     perturbations of SD ``es_sigma`` (table units), Adam at ``learning_rate`` on the mean
-    genome. Means start as the layers initialise them."""
+    genome. Means start as the layers initialise them. The mean genome is scored on the
+    test set after each of ``scorings`` equal spans of the generations (1: at the end)."""
 
     hidden: int = 32
     cell_types: tuple[int | None, int, int | None] = (8, 8, None)
@@ -49,11 +50,17 @@ class EvolutionConfig:
     learning_rate: float = 0.05
     eval_individuals: int = 100
     seed: int = 0
+    scorings: int = 1
 
     def __post_init__(self) -> None:
         for name in ("hidden", "candidates", "individuals", "generations", "batch_size"):
             validation.integer(name, getattr(self, name))
         validation.integer("eval_individuals", self.eval_individuals, minimum=2)
+        validation.integer("scorings", self.scorings)
+        if self.generations % self.scorings:
+            raise ValueError(
+                f"scorings ({self.scorings}) must divide generations ({self.generations})"
+            )
         validation.non_negative("sigma", self.sigma)
         if self.candidates % 2:
             raise ValueError(f"candidates must be even (antithetic pairs), got {self.candidates}")
@@ -126,7 +133,7 @@ def part_accuracies(
 
 
 def evolve(config: EvolutionConfig, data: Dataset) -> dict[str, Any]:
-    """Evolve a genome's means on ``data`` and score its last mean genome on the test set.
+    """Evolve a genome's means on ``data`` and score its mean genome on the test set.
 
     Returns per generation the candidates' mean and best fitness (training accuracy of
     their networks, a fraction); at the end the test accuracy of ``eval_individuals``
@@ -134,7 +141,10 @@ def evolve(config: EvolutionConfig, data: Dataset) -> dict[str, Any]:
     the split of the individuals' accuracies over ``TEST_PARTS`` parts of the test set
     into variance between individuals and residual, the parts' shared difficulty taken
     out (``sgb.reliability.variance_split``, crossed; none where every individual scores
-    alike, as at sigma = 0)."""
+    alike, as at sigma = 0); and ``course``: after each of ``config.scorings`` equal spans
+    of the generations, the same scores (``score``) with the individuals' mean
+    (``accuracy``) in place of each one's, the last the end's.
+    The generations run as one sequence of keys however they are cut into spans."""
     from evosax.algorithms import Open_ES  # here: importing evosax starts a JAX backend
 
     model = _model(config, data)
@@ -173,15 +183,34 @@ def evolve(config: EvolutionConfig, data: Dataset) -> dict[str, Any]:
         return state, (fitness.mean(), fitness.max())
 
     run = jax.jit(lambda state, keys: jax.lax.scan(generation, state, keys))
-    state, (mean_fitness, best_fitness) = run(state, jax.random.split(key, config.generations))
-    final = develop(params, strategy.get_mean(state), config.sigma)
+    spans = jax.random.split(key, config.generations).reshape(config.scorings, -1)
+    mean_fitness, best_fitness, course = [], [], []
+    for j, keys in enumerate(spans):
+        state, (mean_j, best_j) = run(state, keys)
+        mean_fitness += np.asarray(mean_j).tolist()
+        best_fitness += np.asarray(best_j).tolist()
+        scored = score(model, develop(params, strategy.get_mean(state), config.sigma), config, data)
+        course.append(
+            {
+                "generation": (j + 1) * len(keys),
+                "accuracy": float(np.mean(scored["individuals"])),
+                **{k: v for k, v in scored.items() if k != "individuals"},
+            }
+        )
+    return {"mean_fitness": mean_fitness, "best_fitness": best_fitness, **scored, "course": course}
+
+
+def score(model: SGBMLP, developed: dict, config: EvolutionConfig, data: Dataset) -> dict:
+    """The test accuracy of ``config.eval_individuals`` individuals of the developed mean
+    genome (``individuals``, all equal for sigma = 0), of its mean network
+    (``mean_network``), and, where the individuals differ at all, the crossed variance
+    split of their accuracies over ``TEST_PARTS`` parts of the test set
+    (``variance_split``: SDs in accuracy units, ICC, the F-test's p)."""
     x_test, y_test = jnp.asarray(data.x_test), jnp.asarray(data.y_test)
     eval_keys = jax.random.split(jax.random.key(config.seed + 1), config.eval_individuals)
-    parts = part_accuracies(model, final, x_test, y_test, eval_keys, config.stochastic)
-    mean_network = part_accuracies(model, final, x_test, y_test, eval_keys, False)
+    parts = part_accuracies(model, developed, x_test, y_test, eval_keys, config.stochastic)
+    mean_network = part_accuracies(model, developed, x_test, y_test, eval_keys, False)
     out = {
-        "mean_fitness": np.asarray(mean_fitness).tolist(),
-        "best_fitness": np.asarray(best_fitness).tolist(),
         "individuals": np.broadcast_to(parts.mean(axis=1), (config.eval_individuals,)).tolist(),
         "mean_network": float(mean_network.mean()),
     }

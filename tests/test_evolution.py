@@ -31,6 +31,23 @@ def test_evolution_lifts_innate_accuracy_far_above_chance_from_fitness_alone(dig
     assert split["within_sd"] > 0 and 0 <= split["p"] <= 1
 
 
+def test_scoring_along_the_way_leaves_the_evolution_as_it_was(digits):
+    """Cut into 4 spans, the same 40 generations give the same fitness curves; each span
+    is scored, and the last score is the end's."""
+    config = dataclasses.replace(SMALL, sigma=0.3, generations=40, eval_individuals=12)
+    whole = evolve(config, digits)
+    spans = evolve(dataclasses.replace(config, scorings=4), digits)
+    np.testing.assert_allclose(spans["mean_fitness"], whole["mean_fitness"], rtol=1e-6)
+    np.testing.assert_allclose(spans["best_fitness"], whole["best_fitness"], rtol=1e-6)
+    assert [p["generation"] for p in spans["course"]] == [10, 20, 30, 40]
+    last = spans["course"][-1]
+    assert last["accuracy"] == pytest.approx(np.mean(spans["individuals"]))
+    assert last["variance_split"] == spans["variance_split"]
+    assert spans["individuals"] == pytest.approx(whole["individuals"], abs=1e-6)
+    with pytest.raises(ValueError, match="must divide"):
+        dataclasses.replace(config, scorings=3)
+
+
 def test_a_deterministic_genome_develops_its_mean_network_alone(digits):
     result = evolve(dataclasses.replace(SMALL, generations=5), digits)
     assert set(result["individuals"]) == {result["mean_network"]}

@@ -1,6 +1,9 @@
 """``sgb.experiments.evolution``: its rows of the scorecard, its texts and its tables, on the
 committed results and on inputs with known effects."""
 
+from types import SimpleNamespace
+
+import matplotlib
 import numpy as np
 import pytest
 
@@ -8,6 +11,9 @@ from sgb import verdicts
 from sgb.experiments import (
     evolution,
 )
+from sgb.plots import beyond
+
+matplotlib.use("agg")
 
 
 def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
@@ -43,3 +49,46 @@ def test_evolution_rows_find_a_known_gain_and_rule_out_a_missing_one():
     assert helps.verdict in verdicts.IN_DIRECTION
     assert helps.test.estimate == pytest.approx(5.0, abs=0.5)
     assert flat.verdict == verdicts.CONTRADICTED and flat.test.high < 1.0
+
+
+def test_the_course_text_and_figure_follow_the_individuals_differences_along_the_way():
+    """Five runs whose individuals differ at the first scoring (SD 2 points, p 0.001) and
+    not at the last (SD 0.1, p 0.4); runs scored at their end only have no course."""
+
+    def scoring(generation: int, between: float, p: float) -> dict:
+        split = {"between_sd": between, "within_sd": 0.02, "icc": 0.1, "p": p}
+        return {
+            "generation": generation,
+            "accuracy": 0.8,
+            "mean_network": 0.8,
+            "variance_split": split,
+        }
+
+    course = [scoring(1000, 0.02, 0.001), scoring(2000, 0.001, 0.4)]
+    records = [
+        evolution.EvolutionRecord.model_validate(
+            {
+                "hidden_types": 8,
+                "sigma": 0.5,
+                "seed": seed,
+                "compression": 5.0,
+                "mean_fitness": [0.5, 0.8],
+                "individuals": [0.8, 0.81],
+                "mean_network": 0.8,
+                "course": course,
+                "wall_time_s": 1.0,
+            }
+        )
+        for seed in range(5)
+    ]
+    assert evolution._course_text(records) == (
+        "its individuals differ measurably (F-test, p < 0.05) in 5 of 5 runs after 1,000 "
+        "generations and in 0 after 2,000; the median SD between them 2.0 points, then 0.1"
+    )
+    unscored = [r.model_copy(update={"course": None}) for r in records]
+    assert evolution._course_text(unscored).endswith("(these runs were scored at their end only)")
+    results = SimpleNamespace(records=records)
+    ax = beyond.plot_variance_course(results)
+    (line,) = ax.get_lines()
+    assert line.get_xdata().tolist() == [1000, 2000]
+    assert line.get_ydata() == pytest.approx([2.0, 0.1])

@@ -12,7 +12,9 @@ evaluations. Each cell evolves one genome at one number of hidden types, spread 
 the genomes of a seed start from the same means. Each cell keeps its fitness curves, the
 test accuracy of ``eval_individuals`` individuals of its last mean genome and of that
 genome's mean network, and the variance split; the summary gives each curve's slope over
-its last fifth (has it converged?).
+its last fifth (has it converged?), and the split along the way: each cell scores its mean
+genome on the test set after every tenth of its generations, so that the course of its
+individuals' differences shows what evolution does to them.
 
 ``run`` writes ``evolution_<dataset>_<profile>.json`` after every cell, atomically, with
 provenance; a rerun with the same config skips the cells already there.
@@ -205,6 +207,7 @@ PROFILES: dict[str, EvolutionSweep] = {
             generations=20,
             batch_size=128,
             eval_individuals=10,
+            scorings=2,
         ),
         hidden_types=(2,),
         sigmas=(0.0, 0.1),
@@ -212,14 +215,16 @@ PROFILES: dict[str, EvolutionSweep] = {
     ),
     "cpu": EvolutionSweep(
         "digits",
-        EvolutionConfig(cell_types=(None, 8, None), generations=GENERATIONS),
+        EvolutionConfig(cell_types=(None, 8, None), generations=GENERATIONS, scorings=10),
         hidden_types=(8,),
         sigmas=SIGMAS,
         seeds=(0, 1, 2, 3, 4),
     ),
     "paper": EvolutionSweep(
         "fashion-mnist",
-        EvolutionConfig(hidden=64, cell_types=(None, 8, None), generations=4 * GENERATIONS),
+        EvolutionConfig(
+            hidden=64, cell_types=(None, 8, None), generations=4 * GENERATIONS, scorings=10
+        ),
         hidden_types=(8,),
         sigmas=SIGMAS,
         seeds=(0, 1, 2, 3, 4),
@@ -268,13 +273,14 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
     per spread j of ``SIGMAS`` past 0 its sigma (``evo_s{j}``), its
     individuals' test accuracy (``evo_s{j}_individuals``), how much they differ
     (``evo_s{j}_split``: the runs whose individuals differ by the F-test, and the variance
-    split's medians over seeds) and its row of
+    split's medians over seeds), how that moved from the first scoring along the way to
+    the last (``evo_s{j}_course``) and its row of
     ``evolution_rows`` (``evo_s{j}_*``); ``NOT_RUN`` for all without the file."""
     texts = {"evo_design": NOT_RUN, "evo_deterministic": NOT_RUN, "evo_slopes": NOT_RUN}
     texts["evo_rising"] = NOT_RUN
     for j, sigma in enumerate(SIGMAS[1:], 1):
         texts[f"evo_s{j}"] = f"{sigma:g}"
-        texts |= {f"evo_s{j}_{g}": NOT_RUN for g in ("individuals", "split")}
+        texts |= {f"evo_s{j}_{g}": NOT_RUN for g in ("individuals", "split", "course")}
         texts |= row_texts(f"evo_s{j}", None)
     if payload is None:
         return texts
@@ -311,10 +317,33 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
             f"between parts of the test set (ICC {np.median([v.icc for v in splits]):.2f}; "
             "medians over the runs)"
         )
+        texts[f"evo_s{j}_course"] = _course_text(cells)
         texts |= row_texts(
             f"evo_s{j}", row_of(card, "ch6.evolution_stochastic_helps", f"sigma {sigma:g}")
         )
     return texts
+
+
+def _course_text(cells: list["EvolutionRecord"]) -> str:
+    """How the individuals' differences moved over the runs ``cells`` of one spread: the
+    runs whose individuals differ measurably (F-test, p < 0.05) at the first scoring and
+    at the last, and the median SD between them (0 where all score alike); ``NOT_RUN``
+    where the runs were not scored along the way."""
+    if any(c.course is None or len(c.course) < 2 for c in cells):
+        return f"{NOT_RUN} (these runs were scored at their end only)"
+
+    def at(i: int) -> tuple[int, int, float]:
+        splits = [c.course[i].variance_split for c in cells]
+        differ = sum(v is not None and v.p < 0.05 for v in splits)
+        between = np.median([0.0 if v is None else 100 * v.between_sd for v in splits])
+        return cells[0].course[i].generation, differ, between
+
+    (g1, a, s1), (g2, b, s2) = at(0), at(-1)
+    return (
+        f"its individuals differ measurably (F-test, p < 0.05) in {a} of {len(cells)} runs "
+        f"after {g1:,} generations and in {b} after {g2:,}; the median SD between them "
+        f"{s1:.1f} points, then {s2:.1f}"
+    )
 
 
 SDS = ("between_sd", "within_sd")  # a variance split's two SDs, in accuracy units
@@ -370,6 +399,15 @@ class VarianceSplitRecord(Record):
     p: Probability
 
 
+class Scoring(Record):
+    """The mean genome scored on the test set part-way (``sgb.evolution.evolve``)."""
+
+    generation: Count
+    accuracy: Accuracy  # its individuals' mean
+    mean_network: Accuracy
+    variance_split: VarianceSplitRecord | None = None
+
+
 class EvolutionRecord(Record):
     hidden_types: Count
     sigma: NonNegative
@@ -379,6 +417,7 @@ class EvolutionRecord(Record):
     individuals: List[Accuracy]
     mean_network: Accuracy
     variance_split: VarianceSplitRecord | None = None
+    course: List[Scoring] | None = None  # absent from runs made before it was scored
     wall_time_s: Seconds
 
 

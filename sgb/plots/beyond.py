@@ -47,6 +47,45 @@ def plot_evolution(results: Record, axes: Sequence[Axes] | None = None) -> list:
     return [curves, bars]
 
 
+def plot_variance_course(results: Record, ax: Axes | None = None) -> Axes:
+    """``results``: an ``EvolutionResults`` record whose runs were scored along the way.
+    Per spread sigma > 0, the SD between the evolved genome's individuals (test-accuracy
+    points, from the crossed variance split; 0 where every individual scores alike) at
+    each scoring: the median over seeds as a line, each seed a dot, hollow where the
+    F-test finds no difference (p >= 0.05). Returns the axes."""
+    ax = axes_or_new(ax)
+    records = [r for r in results.records if r.sigma > 0 and r.course]
+    sigmas = sorted({r.sigma for r in records})
+    colors = sns.color_palette("viridis", len(sigmas) + 1)[1:]  # sigma 0's colour left out
+    for sigma, color in zip(sigmas, colors, strict=True):
+        cells = [r for r in records if r.sigma == sigma]
+        generations = [p.generation for p in cells[0].course]
+        sds = np.array(
+            [
+                [
+                    0.0 if p.variance_split is None else 100 * p.variance_split.between_sd
+                    for p in c.course
+                ]
+                for c in cells
+            ]
+        )
+        ax.plot(generations, np.median(sds, axis=0), color=color, lw=1.5, label=f"sigma {sigma:g}")
+        for c, row in zip(cells, sds, strict=True):
+            differ = [p.variance_split is not None and p.variance_split.p < 0.05 for p in c.course]
+            ax.scatter(
+                generations,
+                row,
+                s=12,
+                color=[color if d else "none" for d in differ],
+                edgecolors=color,
+                lw=0.8,
+            )
+    ax.set_xlabel("generation")
+    ax.set_ylabel("SD between individuals (accuracy points)")
+    ax.legend(fontsize=8, title="median over seeds; hollow: p >= 0.05", title_fontsize=7)
+    return ax
+
+
 def plot_hedging(
     results: Record, q: str = "0.5", k: str = "1", axes: Sequence[Axes] | None = None
 ) -> list:
