@@ -109,10 +109,11 @@ def held_results(path: str | Path, config: Any) -> dict[str, Any]:
 def _results_of(path: str | Path, config: Any) -> dict[str, Any] | None:
     """The results in ``path`` of a run of ``config`` (``{}`` without the file, ``None``
     where a run of another config wrote it); a CorruptFile as ``earlier_results`` says."""
-    if not Path(path).exists():
+    try:
+        payload = read_results(path)
+        manifest.verify(path)
+    except FileNotFoundError:  # none, or another worker's ``superseding`` deleted it
         return {}
-    payload = read_results(path)
-    manifest.verify(path)
     for part in ("provenance", "results"):
         if not isinstance(payload, dict) or not isinstance(payload.get(part), dict):
             problem = f'has no "{part}" object, so is not a results file'
