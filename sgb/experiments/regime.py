@@ -249,7 +249,7 @@ def regime(payload: "Regime") -> dict[str, str]:
     ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds, and the
     scorecard's rows of the level at 128 types, the fall to 16 and the fall's shape with
     the authors' genome (``regime_level``, ``regime_fall``, ``regime_shape``: estimate,
-    interval and verdict; "no row yet" while an arm they compare has one seed)."""
+    interval and verdict; "no row yet" while an arm they compare has fewer than two seeds)."""
     runs, summary = payload.results.runs, payload.results.summary
     card = claims.by_key(regime_rows(runs, trained_steps(payload)))
     genome = claims.REGIME_SETTINGS["authors"]
@@ -260,7 +260,7 @@ def regime(payload: "Regime") -> dict[str, str]:
         )
         found = row_texts("row", row)
         texts[f"regime_{name}"] = (
-            "no row yet (an arm it compares has one seed)"
+            "no row yet (an arm it compares has fewer than two seeds)"
             if row is None
             else f"{found['row_ours']}, {found['row_verdict']}"
         )
