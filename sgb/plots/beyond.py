@@ -82,7 +82,7 @@ def plot_variance_course(results: Record, ax: Axes | None = None) -> Axes:
             )
     ax.set_xlabel("generation")
     ax.set_ylabel("SD between individuals (accuracy points)")
-    ax.legend(fontsize=8, title="median over seeds; hollow: p >= 0.05", title_fontsize=7)
+    ax.legend(fontsize=8, title="median over seeds; hollow: p >= 0.05", title_fontsize=8)
     return ax
 
 

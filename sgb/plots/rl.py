@@ -120,7 +120,7 @@ def plot_sigma_courses(courses: dict[str, tuple], ax=None):
             )
     ax.set_xlabel("env steps (millions)")
     ax.set_ylabel("mean sigma of the layer's type pairs")
-    ax.legend(fontsize=7, ncol=2)
+    ax.legend(fontsize=8, ncol=2)
     return ax
 
 
