@@ -9,6 +9,7 @@ import signal
 import subprocess
 import sys
 import tomllib
+import warnings
 from pathlib import Path
 
 import pytest
@@ -71,6 +72,19 @@ def test_notebook_is_committed_without_outputs(notebook):
         assert cell.get("outputs") == [], f"{notebook}: cell {index} has outputs"
         assert cell.get("execution_count") is None, f"{notebook}: cell {index} has a count"
         assert "execution" not in cell["metadata"], f"{notebook}: cell {index} has run times"
+
+
+@pytest.mark.parametrize("notebook", NOTEBOOKS)
+def test_notebook_validates_with_an_id_on_every_cell(notebook):
+    """nbformat 4.5 requires cell ids; a missing one is a warning today, an error later."""
+    nbformat = pytest.importorskip("nbformat")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        book = nbformat.read(ROOT / notebook, as_version=4)
+        nbformat.validate(book)
+    ids = [cell.get("id") for cell in book.cells]
+    assert None not in ids, f"{notebook}: a cell has no id"
+    assert len(set(ids)) == len(ids), f"{notebook}: two cells share an id"
 
 
 @pytest.mark.parametrize("notebook", NOTEBOOKS)
