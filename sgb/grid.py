@@ -36,7 +36,7 @@ import sys
 import time
 import traceback
 import warnings
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
@@ -246,31 +246,43 @@ def run_left_s(run: QueuedRun, typical_s: float | None, into_chunk: float = 0.0)
     return None if per_chunk is None else time_left(per_chunk, run.chunks - chunk, into_chunk)
 
 
+def time_left_s(queue: Queue, into_chunks: Sequence[float] | None = None) -> float | None:
+    """Seconds of one core ``queue``'s unfinished runs should take (``run_left_s`` summed);
+    None where a run waits with no finished run to time it by. ``into_chunks``: per run
+    of ``queue.runs``, seconds already spent on its current chunk (none by default)."""
+    typical = _typical_s(queue)
+    if typical is None and not all(r.finished for r in queue.runs):
+        return None
+    into = into_chunks or [0.0] * len(queue.runs)
+    return sum(run_left_s(r, typical, i) or 0.0 for r, i in zip(queue.runs, into, strict=True))
+
+
 def describe(queue: Queue) -> list[str]:
     """A line per run of ``queue``: done (its wall time), running (its process, chunk and
     ETA), or waiting (where it resumes), and a summary line."""
     typical = _typical_s(queue)
-    lines, left = [], 0.0
+    lines, into_chunks = [], []
     for r in queue.runs:
         chunk = 0 if r.finished else r.chunks_done
         pid = None if r.finished else runlock.holder(r.checkpoint)
         # a running run is into its current chunk since its state was last written
         into = time.time() - r.state.stat().st_mtime if pid and r.state.exists() else 0.0
-        remaining = run_left_s(r, typical, into)
+        into_chunks.append(into)
         if r.finished:
             what = f"done ({_hours(r.wall_time_s)})" if r.wall_time_s else "done"
         elif pid is not None:
+            remaining = run_left_s(r, typical, into)
             eta = "ETA unknown" if remaining is None else f"ETA {_hours(remaining)}"
             what = f"running (pid {pid}): chunk {chunk + 1} of {r.chunks}, {eta}"
         else:
             what = f"waiting (resumes at chunk {chunk + 1})" if chunk else "waiting"
-        left += remaining or 0.0
         lines.append(f"  {r.label}: {what}")
     done = sum(r.finished for r in queue.runs)
-    if typical or done == len(queue.runs):
-        still = f"about {_hours(left)} of one core left"
-    else:
+    left = time_left_s(queue, into_chunks)
+    if left is None:
         still = "time left unknown: no finished run to time the waiting ones by"
+    else:
+        still = f"about {_hours(left)} of one core left"
     lines.append(f"  {done} of {len(queue.runs)} runs done; {still}")
     return lines
 
@@ -278,13 +290,11 @@ def describe(queue: Queue) -> list[str]:
 def progress(results_dir: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> pd.DataFrame:
     """The long runs' progress in the results under ``results_dir``, one row per
     experiment of ``queue``: its results file, its runs done, part-way (a kept state) and
-    in all, and the hours of one core the rest should take, estimated as ``describe``
-    does (blank where no finished run times the waiting ones)."""
+    in all, and the hours of one core the rest should take (``time_left_s``; blank where
+    no finished run times the waiting ones)."""
     rows = []
     for name, profile, listed in queues(results_dir, queue):
-        typical = _typical_s(listed)
-        left = [run_left_s(r, typical) for r in listed.runs]
-        known = typical is not None or all(r.finished for r in listed.runs)
+        left = time_left_s(listed)
         rows.append(
             {
                 "experiment": f"{name} --profile {profile}",
@@ -292,7 +302,7 @@ def progress(results_dir: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> p
                 "runs done": sum(r.finished for r in listed.runs),
                 "part-way": sum(not r.finished and r.chunks_done > 0 for r in listed.runs),
                 "runs": len(listed.runs),
-                "one-core hours left": sum(x or 0.0 for x in left) / 3600 if known else None,
+                "one-core hours left": None if left is None else left / 3600,
             }
         )
     return pd.DataFrame(rows)

@@ -309,8 +309,8 @@ def evolution(payload: "Evolution | None") -> dict[str, str]:
             continue
         texts[f"evo_s{j}_individuals"] = _mean_sem([100 * np.mean(r.individuals) for r in cells])
         splits = [r.variance_split for r in cells]
-        differ = sum(v.p < 0.05 for v in splits)
-        between, within = (100 * np.median([getattr(v, f) for v in splits]) for f in SDS)
+        differ, between = _how_they_differ(splits)
+        within = 100 * np.median([v.within_sd for v in splits])
         texts[f"evo_s{j}_split"] = (
             f"its individuals differ measurably (F-test, p < 0.05) in {differ} of "
             f"{len(splits)} runs, by an SD of {between:.1f} points, against {within:.1f} "
@@ -332,13 +332,10 @@ def _course_text(cells: list["EvolutionRecord"]) -> str:
     if any(c.course is None or len(c.course) < 2 for c in cells):
         return f"{NOT_RUN} (these runs were scored at their end only)"
 
-    def at(i: int) -> tuple[int, int, float]:
-        splits = [c.course[i].variance_split for c in cells]
-        differ = sum(v is not None and v.p < 0.05 for v in splits)
-        between = np.median([0.0 if v is None else 100 * v.between_sd for v in splits])
-        return cells[0].course[i].generation, differ, between
-
-    (g1, a, s1), (g2, b, s2) = at(0), at(-1)
+    (a, s1), (b, s2) = (
+        _how_they_differ([c.course[i].variance_split for c in cells]) for i in (0, -1)
+    )
+    g1, g2 = (cells[0].course[i].generation for i in (0, -1))
     return (
         f"its individuals differ measurably (F-test, p < 0.05) in {a} of {len(cells)} runs "
         f"after {g1:,} generations and in {b} after {g2:,}; the median SD between them "
@@ -346,7 +343,13 @@ def _course_text(cells: list["EvolutionRecord"]) -> str:
     )
 
 
-SDS = ("between_sd", "within_sd")  # a variance split's two SDs, in accuracy units
+def _how_they_differ(splits: list["VarianceSplitRecord | None"]) -> tuple[int, float]:
+    """Of one spread's runs, those whose individuals differ measurably (F-test, p < 0.05)
+    and the median SD between individuals in accuracy points; a split of ``None`` (every
+    individual scored alike) counts as no difference, an SD of 0."""
+    differ = sum(v is not None and v.p < 0.05 for v in splits)
+    between = np.median([0.0 if v is None else 100 * v.between_sd for v in splits])
+    return differ, float(between)
 
 
 def _mean_sem(values: list[float]) -> str:
