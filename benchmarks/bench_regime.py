@@ -11,8 +11,11 @@ round, after a compiling call):
 - ``collection``: the regime's unrolls alone (``Trainer.collect``), no update;
 - ``update``: the 4 x 32 minibatch steps alone (``Trainer.sgd``) on a stored batch;
 - ``iteration``: whole iterations (``Trainer.iterations``: collection, normaliser, update);
-- ``evaluation``: one of the authors' evaluations (``Trainer.window_return`` on 2048
-  environments for 1000 steps), counted apart; a run makes ``num_evals + 1`` of them;
+- ``evaluation``: the last of the authors' evaluations (``Trainer.window_return`` on
+  2048 environments for 1000 steps), and ``interim evaluation``, one of those before it
+  (on 256, ``PPOConfig.eval_size``), counted apart; a run makes ``num_evals + 1``, the
+  last one large; ``run_hours`` are a run's training and evaluations at these rates, and
+  ``evaluation_share`` the evaluations' part of the two;
 - where the update's time goes, over the same 4 x 32 minibatches of the stored batch:
   ``loss forward`` (the PPO loss alone, ``sgb.rl.losses.ppo_loss``) and ``loss
   gradients`` (its gradient, no optimiser step); ``update_shares`` splits the update
@@ -61,8 +64,6 @@ def _timed(fn, *args) -> float:
 def phases(cell_types: int | None, iterations: int) -> dict:
     """The phases of one configuration, each a ``(function, args, env_steps)``, and the
     SGD's flops per env step."""
-    from dataclasses import replace
-
     import jax
 
     from sgb.rl.losses import ppo_loss
@@ -74,7 +75,7 @@ def phases(cell_types: int | None, iterations: int) -> dict:
     trainer = make_trainer(config.step_settings())
     ts = trainer.restart_all(init_state(config, seed=0))
     steps = config.steps_per_iteration
-    env, e = trainer.env, config.num_envs
+    env = trainer.env
     t = config.unroll_length * config.unrolls_per_iteration
     mix = jax.random.normal(jax.random.PRNGKey(1), (env.observation_size, env.action_size))
 
@@ -101,8 +102,13 @@ def phases(cell_types: int | None, iterations: int) -> dict:
     a = jax.random.normal(jax.random.PRNGKey(3), (rows, 128))
     b = jax.random.normal(jax.random.PRNGKey(4), (128, 128))
     matmul = jax.jit(lambda a, b: jax.lax.fori_loop(0, 64, lambda _, x: jax.numpy.tanh(x @ b), a))
-    evaluation = replace(config, eval_individuals=e)
     settings = config.step_settings()
+
+    def evaluation(size: int) -> tuple:
+        def window(ts):
+            return trainer.window_return(ts.params, ts.normalizer, jax.random.PRNGKey(2), size)
+
+        return window, (ts,), size * config.episode_length
 
     def loss(params, batch, key):
         return ppo_loss(params, batch, ts.normalizer, key, trainer.agent, settings.loss)[0]
@@ -118,13 +124,8 @@ def phases(cell_types: int | None, iterations: int) -> dict:
         "collection": (collect, (ts,), steps),
         "update": (sgd, (ts, data), steps),
         "iteration": (lambda ts: trainer.iterations(ts, iterations), (ts,), iterations * steps),
-        "evaluation": (
-            lambda ts: trainer.window_return(
-                ts.params, ts.normalizer, jax.random.PRNGKey(2), evaluation.eval_individuals
-            ),
-            (ts,),
-            evaluation.eval_individuals * config.episode_length,
-        ),
+        "evaluation": evaluation(config.eval_size(last=True)),
+        "interim evaluation": evaluation(config.eval_size(last=False)),
         "matmul": (matmul, (a, b), 64 * 2 * rows * 128 * 128),
         "sgd_flops_per_env_step": flops / steps,
         "evals_per_run": config.num_evals + int(config.eval_at_start),
@@ -170,7 +171,8 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
     """Median env-steps/s of every phase over ``rounds`` interleaved rounds, their ratios
     to the simulator, the bound and the share of a run's time its evaluations take."""
     measured = phases(cell_types, iterations)
-    names = ("simulator", "collection", "update", "iteration", "evaluation", "matmul")
+    names = ("simulator", "collection", "update", "iteration", "evaluation")
+    names += ("interim evaluation", "matmul")
     names += ("loss forward", "loss gradients")
     for name in names:  # compile
         fn, args, _ = measured[name]
@@ -193,7 +195,11 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
     }
     bound = 1.0 / (1.0 / rate["collection"] + 1.0 / rate["update"])
     train_s = measured["iterations_per_run"] * measured["steps_per_iteration"] / rate["iteration"]
-    eval_s = measured["evals_per_run"] * measured["evaluation"][2] / rate["evaluation"]
+    interim = measured["evals_per_run"] - 1
+    eval_s = sum(
+        count * measured[name][2] / rate[name]
+        for name, count in (("evaluation", 1), ("interim evaluation", interim))
+    )
     return {
         "cell_types": cell_types,
         "env_steps_per_s": rate,
@@ -206,22 +212,23 @@ def measure(cell_types: int | None, rounds: int, iterations: int) -> dict:
         "update_gflops": measured["sgd_flops_per_env_step"] * rate["update"] / 1e9,
         "matmul_gflops": matmul_gflops,
         "run_hours": {"training": train_s / 3600, "evaluations": eval_s / 3600},
+        "evaluation_share": eval_s / (train_s + eval_s),
         "update_shares": shares,
     }
 
 
 def table(rows: list[dict]) -> str:
     """The results as a text table: env-steps/s and the ratio to the simulator."""
-    lines = [f"{'phase':<12}" + "".join(f"{_name(r):>24}" for r in rows)]
+    lines = [f"{'phase':<22}" + "".join(f"{_name(r):>24}" for r in rows)]
     phases = ("simulator", "collection", "update", "iteration", "evaluation")
-    for phase in (*phases, "loss forward", "loss gradients"):
+    for phase in (*phases, "interim evaluation", "loss forward", "loss gradients"):
         cells = [
             f"{r['env_steps_per_s'][phase]:>14,.0f} ({r['ratio_to_simulator'][phase]:.2f}x)"
             for r in rows
         ]
-        lines.append(f"{phase:<12}" + "".join(f"{c:>24}" for c in cells))
+        lines.append(f"{phase:<22}" + "".join(f"{c:>24}" for c in cells))
     lines.append(
-        f"{'bound':<12}"
+        f"{'bound':<22}"
         + "".join(
             f"{r['bound_env_steps_per_s']:>14,.0f} ({r['bound_over_simulator']:.2f}x)" for r in rows
         )
@@ -229,13 +236,15 @@ def table(rows: list[dict]) -> str:
     formats = {"iteration_over_bound": "{:.3f}", "sgd_flops_per_env_step": "{:,.0f}"}
     formats |= {"update_gflops": "{:.1f}", "matmul_gflops": "{:.1f}"}
     for key, fmt in formats.items():
-        lines.append(f"{key:<12}" + "".join(f"{fmt.format(r[key]):>24}" for r in rows))
+        lines.append(f"{key:<22}" + "".join(f"{fmt.format(r[key]):>24}" for r in rows))
     for part in ("training", "evaluations"):
         hours = "".join(f"{r['run_hours'][part]:>23.2f}h" for r in rows)
-        lines.append(f"{'run ' + part:<12}" + hours)
+        lines.append(f"{'run ' + part:<22}" + hours)
+    shares = "".join(f"{r['evaluation_share']:>24.1%}" for r in rows)
+    lines.append(f"{'evaluation share':<22}" + shares)
     for part in ("forward", "backward", "optimizer"):
         shares = "".join(f"{r['update_shares'][part]:>24.2f}" for r in rows)
-        lines.append(f"{'update ' + part:<12}" + shares)
+        lines.append(f"{'update ' + part:<22}" + shares)
     return "\n".join(lines)
 
 

@@ -236,7 +236,8 @@ class BenchRegimeRow(Record):
     update_gflops: Positive
     matmul_gflops: Positive
     run_hours: Each(Positive)
-    update_shares: Each(Finite) = None  # forward, backward, optimiser (since the breakdown)
+    evaluation_share: Probability  # a run's evaluations, of its training and evaluations
+    update_shares: Each(Finite)  # forward, backward, optimiser
 
 
 class BenchRegimeResults(Record):
