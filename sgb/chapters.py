@@ -19,9 +19,14 @@ def _backends(records: Records, card: prose.Card) -> dict[str, str]:
     return prose.backends(records("bench_backends"))
 
 
-# name -> texts(records, card): each experiment's, and the benchmark of Brax's backends
+def _bench_regime(records: Records, card: prose.Card) -> dict[str, str]:
+    return prose.evaluation_share(records("bench_regime"))
+
+
+# name -> texts(records, card): each experiment's, and the benchmarks chapter 5 cites
 SOURCES = {name: e.texts for name, e in EXPERIMENTS.items() if e.texts} | {
-    "bench_backends": _backends
+    "bench_backends": _backends,
+    "bench_regime": _bench_regime,
 }
 # chapter (its notebook's stem) -> the sources whose texts it glues
 CHAPTERS = {
@@ -29,6 +34,7 @@ CHAPTERS = {
     "04_dgb_vs_sgb": ("fig2", "mean_gap", "dgb_budget", "sgb_full", "width"),
     "05_brax_populations": (
         "bench_backends",
+        "bench_regime",
         "regime",
         "regime_peer",
         "regime_gait",

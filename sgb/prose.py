@@ -11,7 +11,7 @@ import math
 from importlib import metadata
 
 from sgb.claims import Row
-from sgb.schemas import BenchBackends
+from sgb.schemas import BenchBackends, BenchRegime
 
 NOT_RUN = "not yet run"
 ROW_PARTS = ("verdict", "ours", "detectable", "decide")
@@ -64,6 +64,17 @@ def backends(bench: BenchBackends) -> dict[str, str]:
         "fastest_backend": f"`{max(speeds, key=speeds.get)}`",
         "brax_version": metadata.version("brax"),
     }
+
+
+def evaluation_share(bench: BenchRegime) -> dict[str, str]:
+    """``regime_eval_share``: the part of a regime run's CPU time its evaluations take at
+    the regime's protocol, per configuration of ``benchmarks/bench_regime.py``'s results."""
+    shares = [
+        f"{100 * row.evaluation_share:.0f} % "
+        + ("(vanilla)" if row.cell_types is None else f"({row.cell_types} types)")
+        for row in bench.results.rows
+    ]
+    return {"regime_eval_share": " and ".join(shares)}
 
 
 # Chapter 4 --------------------------------------------------------------------------------
