@@ -246,8 +246,12 @@ def test_the_regime_genomes_wait_for_their_run_under_the_regime_as_it_now_trains
     assert not populations.landed(k64, config, tmp_path)
     queued = populations.queued("cpu", results)
     assert [r.chunks for r in queued.runs[:2]] == [3, 3]
-    waiting = queued.runs[labels.index("ant_regime_k64_s1")].label
-    assert "(its training has not landed)" in waiting
+    for genome, run in zip(config.genomes, queued.runs, strict=True):
+        waits = "(its training has not landed)" in run.label
+        assert waits == (not populations.landed(genome, config, results)), run.label
+    # under tmp_path, the older run's checkpoint stands in for the committed one: it waits
+    older_listed = populations.queued("cpu", tmp_path).runs[labels.index("ant_regime_k64_s0")]
+    assert older_listed.label == "64 types seed 0 (its training has not landed)"
     # the same genome part-way: the state its run keeps after chunk 2, 10^7 steps in
     early = by_label["ant_regime_k64_s0_chunk2"]
     assert populations.checkpoint_path(early, config) == (
