@@ -12,6 +12,7 @@ import tomllib
 import warnings
 from pathlib import Path
 
+import nbformat
 import pytest
 import yaml
 
@@ -77,7 +78,6 @@ def test_notebook_is_committed_without_outputs(notebook):
 @pytest.mark.parametrize("notebook", NOTEBOOKS)
 def test_notebook_validates_with_an_id_on_every_cell(notebook):
     """nbformat 4.5 requires cell ids; a missing one is a warning today, an error later."""
-    nbformat = pytest.importorskip("nbformat")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         book = nbformat.read(ROOT / notebook, as_version=4)
