@@ -357,3 +357,21 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     assert texts["regime_pop_retest"].startswith("64 types seed 0: r = ")
     texts = population_runs.regime_populations(None)
     assert set(texts.values()) == {population_runs.NOT_RUN}
+    # a genome part-way that does not yet walk (mean return -7): a % of its return says
+    # nothing, so it adds no Figure 5 and no variability row; Figure 4E's r (scale-free) stays
+    crawl = {
+        "sampled": rng.normal(-7, 20, (100, 64)),
+        "long_legs_sampled": rng.normal(-11, 20, (100, 64)),
+        "mean_network_sampled": rng.normal(-7, 20, (16, 1)),
+    }
+    genomes["k64_s0_chunk2"] = genomes["k64_s0"] | {
+        "trained_steps": 9_830_400,
+        "parts": {k: {"returns": v.tolist()} for k, v in crawl.items()},
+        "summary": populations.genome_summary(crawl),
+    }
+    stored = json.loads(json.dumps(jsonable({"genomes": genomes})))
+    more = population_runs.regime_population_rows(
+        populations.RegimePopulationsResults.model_validate(stored)
+    )
+    added = [r for r in more if "9.83 x 10^6 steps" in r.setting]
+    assert [r.key for r in added] == ["fig4e.r_legs"]

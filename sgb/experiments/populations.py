@@ -711,8 +711,9 @@ def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
     at the paper's budget (``reproduce regime_populations``), under each protocol it was
     evaluated with: ours (deterministic actions; Figure 5 paired with the mean network on
     the same initial states) and theirs (sampled actions; Figure 5 by their one-sample t
-    and by Welch's t), Figure 5 in % of the mean network's return, Figure 4E's r against
-    the paper's as these reliabilities see it; then ``pooled_variability_rows``."""
+    and by Welch's t), Figure 5 in % of the mean network's return (left out where that
+    return is not positive), Figure 4E's r against the paper's as these reliabilities see
+    it; then ``pooled_variability_rows``."""
     rows, variability = [], {}
     for genome in results.genomes.values():
         summary = genome.summary
@@ -728,20 +729,20 @@ def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
         protocols = []
         if summary.mean_network is not None:
             ours = summary.mean_network
-            paired = stored_test(ours.test, 100 / ours.mean_network_return)
-            tests = [("our protocol (paired, same states)", paired)]
-            protocols.append(("deterministic actions", summary, tests))
+            tests = [("our protocol (paired, same states)", ours.test)]
+            protocols.append(
+                ("deterministic actions", summary, _percent_of(ours.mean_network_return, tests))
+            )
         theirs = summary.authors_protocol
-        base = 100 / theirs.mean_network_mean
         sampled = (
             f"their protocol ({theirs.individual_episodes} sampled episodes each, "
             f"mean network {theirs.mean_network_episodes})"
         )
         tests = [
-            (f"{sampled}, their one-sample t", stored_test(theirs.one_sample, base)),
-            (f"{sampled}, Welch t", stored_test(theirs.welch, base)),
+            (f"{sampled}, their one-sample t", theirs.one_sample),
+            (f"{sampled}, Welch t", theirs.welch),
         ]
-        protocols.append(("sampled actions", theirs, tests))
+        protocols.append(("sampled actions", theirs, _percent_of(theirs.mean_network_mean, tests)))
         for actions, bodies, tests in protocols:
             found = _protocol_rows(label, actions, bodies, tests, budget)
             rows += [replace(r, amount=genome.trained_steps) for r in found]
@@ -754,6 +755,16 @@ def regime_population_rows(results: "RegimePopulationsResults") -> list[Row]:
                 group = (setting, n, episodes, steps)
                 variability.setdefault(group, []).append(found[-1].test.estimate)
     return rows + pooled_variability_rows("title.variability.regime", variability)
+
+
+def _percent_of(
+    mean_network_return: float, tests: list[tuple[str, StoredTest]]
+) -> list[tuple[str, stats.Test]]:
+    """Figure 5's ``tests`` in % of the mean network's return; none where that return is
+    not positive (a genome that does not yet walk: a % of it says nothing)."""
+    if mean_network_return <= 0:
+        return []
+    return [(name, stored_test(test, 100 / mean_network_return)) for name, test in tests]
 
 
 def regime_steps(steps: int) -> str:
