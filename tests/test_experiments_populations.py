@@ -370,8 +370,16 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
         "summary": populations.genome_summary(crawl),
     }
     stored = json.loads(json.dumps(jsonable({"genomes": genomes})))
-    more = population_runs.regime_population_rows(
-        populations.RegimePopulationsResults.model_validate(stored)
-    )
-    added = [r for r in more if "9.83 x 10^6 steps" in r.setting]
+    results = populations.RegimePopulationsResults.model_validate(stored)
+    added = [
+        r
+        for r in population_runs.regime_population_rows(results)
+        if "9.83 x 10^6 steps" in r.setting
+    ]
     assert [r.key for r in added] == ["fig4e.r_legs"]
+    # the same genome at two points: individuals without a skill of their own part-way,
+    # 15 % of the return apart at the end, told apart only there
+    course = population_runs.regime_populations(SimpleNamespace(results=results))
+    early, late = course["regime_pop_training"].split("; after ")
+    assert early.startswith("64 types seed 0: after 9.83 x 10^6 steps, mean return -7")
+    assert late.endswith("(individuals told apart only after 5 x 10^7 steps)")

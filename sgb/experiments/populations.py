@@ -75,7 +75,7 @@ from sgb.prose import GENOMES, NOT_RUN, REGIME_STEPS, Card, regime_setting, row_
 from sgb.provenance import git_commit, read_results, results_file
 from sgb.queued import Queue, QueuedRun, run_lock
 from sgb.recording import Recording, start
-from sgb.reliability import between_sd_bound, episodes_for, variance_split
+from sgb.reliability import between_sd_at, between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
 from sgb.rl import regime_runs
 from sgb.rl.population import population_returns
@@ -845,16 +845,55 @@ def _genome_name(cell_types: int, seed: int, steps: int) -> str:
     return name if trained == REGIME_STEPS else f"{name} after {trained}"
 
 
+def over_training(genomes: list["RegimePopulationGenome"]) -> str:
+    """Whether variability falls as a genome trains: for each genome measured at more than
+    one point of its run, the normal body under sampled actions at each point (fewest steps
+    first): mean return, ICC with its interval, and the SD between individuals at the
+    interval's upper end in % of the SD within one; then at which points individuals can
+    be told apart (the ICC's interval above 0). ``NOT_RUN`` without such a genome."""
+    runs = {}
+    for g in genomes:
+        runs.setdefault((g.cell_types, g.training_seed), []).append(g)
+    parts = []
+    for (cell_types, seed), points in runs.items():
+        if len(points) < 2:
+            continue
+        said, apart = [], []
+        for g in sorted(points, key=lambda g: g.trained_steps):
+            normal = g.summary.authors_protocol.normal
+            split = normal.variance_split
+            low, high = split.icc_ci
+            most = 100 * between_sd_at(high, split.within_var) / math.sqrt(split.within_var)
+            steps = regime_steps(g.trained_steps)
+            said.append(
+                f"after {steps}, mean return {normal.mean_return:,.0f}: ICC {split.icc:.4f} "
+                f"[{low:.4f}, {high:.4f}], the SD between individuals at most {most:.1f} % "
+                "of the SD within one"
+            )
+            if low > 0:
+                apart.append(steps)
+        told = (
+            f"only after {' and '.join(apart)}" if apart else f"at none of its {len(said)} points"
+        )
+        parts.append(
+            f"{cell_types} types seed {seed}: {'; '.join(said)} (individuals told apart {told})"
+        )
+    return "; ".join(parts) if parts else NOT_RUN
+
+
 def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     """Figures 4E and 5 on the genomes of the authors' regime
     (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``: the
     genomes measured of those the grid trains), the normal body's test-retest reliability
-    under sampled actions (``regime_pop_retest``: the split-half r of each genome), and
+    under sampled actions (``regime_pop_retest``: the split-half r of each genome), the
+    variability of a genome measured part-way and at the end (``regime_pop_training``), and
     each row of ``regime_population_rows``: Figure 4E (``regime_pop_legs``), Figure 5 by
     Welch's t (``regime_pop_welch``) and paired under our protocol (``regime_pop_ours``);
     ``NOT_RUN`` for all without the file or a summary."""
     rows = [] if payload is None else regime_population_rows(payload.results)
-    texts = {"regime_pop_design": NOT_RUN, "regime_pop_retest": NOT_RUN}
+    texts = dict.fromkeys(
+        ("regime_pop_design", "regime_pop_retest", "regime_pop_training"), NOT_RUN
+    )
     if rows:
         genomes = payload.results.genomes
         done = {k: g for k, g in genomes.items() if g.summary is not None}
@@ -872,6 +911,7 @@ def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
             for g in done.values()
             for split in [g.summary.authors_protocol.normal.split_half]
         )
+        texts["regime_pop_training"] = over_training(list(done.values()))
     welch = [r for r in rows if "Welch" in r.setting]
     paired = [r for r in rows if "our protocol" in r.setting]
     return texts | {
