@@ -22,8 +22,9 @@ SHARED_STEP = pytest.mark.xdist_group("reach_sgb_step")
 class Reach(Env):
     """A point on a line moves by 0.1 * action per step towards a random target.
 
-    obs = (position, target - position); reward = -|target - position|; its one metric,
-    ``x_velocity``, is the step's move, 0.1 * action (as Brax's bodies report theirs).
+    obs = (position, target - position); reward = -|target - position|; its metrics are
+    ``x_velocity``, the step's move, 0.1 * action (as Brax's bodies report theirs), and
+    ``reward_ctrl``, -0.01 * action^2, a control cost it reports but does not charge.
     Standing still earns about -32 * E|d| = -21 per episode; an optimal agent about -3.
     """
 
@@ -33,13 +34,14 @@ class Reach(Env):
     def reset(self, rng: jax.Array) -> State:
         pos, target = jax.random.uniform(rng, (2,), minval=-1.0, maxval=1.0)
         obs = jnp.array([pos, target - pos])
-        return State(None, obs, jnp.zeros(()), jnp.zeros(()), {"x_velocity": jnp.zeros(())}, {})
+        metrics = {"x_velocity": jnp.zeros(()), "reward_ctrl": jnp.zeros(())}
+        return State(None, obs, jnp.zeros(()), jnp.zeros(()), metrics, {})
 
     def step(self, state: State, action: jax.Array) -> State:
         pos = state.obs[0] + 0.1 * action[0]
         target = state.obs[0] + state.obs[1]
         obs = jnp.array([pos, target - pos])
-        metrics = {"x_velocity": 0.1 * action[0]}
+        metrics = {"x_velocity": 0.1 * action[0], "reward_ctrl": -0.01 * action[0] ** 2}
         return state.replace(obs=obs, reward=-jnp.abs(target - pos), metrics=metrics)
 
     @property

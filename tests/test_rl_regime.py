@@ -326,7 +326,9 @@ def test_the_window_gait_plays_the_window_of_the_return_and_measures_its_velocit
 ):
     """On the same key the gait's return is the evaluation's, bit for bit; an actor pushed
     to act +-1 everywhere moves the reach point 0.1 a step each way, so its velocity is
-    +-0.1 in every environment, and it walks where the walking speed is below that."""
+    +-0.1 in every environment, its control cost 0.01 a step, and it walks where the
+    walking speed is below that. The return is the episode's length times the reward per
+    step over the episodes per environment (one here: Reach ends no episode early)."""
     config = _authors(NetworkConfig(hidden=(8,)))
     trainer = make_trainer(config.step_settings())
     params = initial_params(config, seed=0)
@@ -336,14 +338,18 @@ def test_the_window_gait_plays_the_window_of_the_return_and_measures_its_velocit
     params = params._replace(actor=actor)
     normalizer = init_normalizer(2)
     key = jax.random.PRNGKey(3)
-    ret, velocity = trainer.window_gait(params, normalizer, key, 4)
+    ret, per_env = trainer.window_gait(params, normalizer, key, 4)
     assert ret == trainer.window_return(params, normalizer, key, 4)
-    np.testing.assert_allclose(velocity, 0.1 * direction * np.ones(4), rtol=1e-6)
+    np.testing.assert_allclose(per_env["velocity"], 0.1 * direction * np.ones(4), rtol=1e-6)
+    np.testing.assert_allclose(per_env["control_cost"], 0.01 * np.ones(4), rtol=1e-6)
+    np.testing.assert_array_equal(per_env["episodes"], np.ones(4))
     monkeypatch.setattr(regime_gait, "WALKING_SPEED", 0.05)
     record = regime_gait.gait(config, params, normalizer, 4, seed=3)
     assert record["forward_velocity"] == pytest.approx(0.1 * direction, rel=1e-6)
     assert record["walks"] is (direction > 0)
     assert record["window_return"] == float(ret)
+    made_of = config.episode_length * record["reward_per_step"] / record["episodes_per_env"]
+    assert record["window_return"] == pytest.approx(made_of, rel=1e-5)
 
 
 def test_smaller_intermediate_evaluations_leave_what_is_trained_bit_for_bit(monkeypatch):

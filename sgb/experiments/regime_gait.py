@@ -16,12 +16,14 @@ by a later run of this experiment), one already in the results file is not evalu
 """
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
 import jax
 import numpy as np
+import pandas as pd
 from pydantic import Field
 
 from sgb import validation
@@ -38,7 +40,9 @@ from sgb.rl.trainer import make_trainer
 from sgb.schemas import (
     MAX_SPEED,
     Count,
+    Finite,
     MaybeEmpty,
+    NonNegative,
     Positive,
     Record,
     ResultsFile,
@@ -72,17 +76,24 @@ def gait_config(profile: str) -> GaitConfig:
 
 def gait(ppo: PPOConfig, params, normalizer, n_envs: int, seed: int) -> dict:
     """The window return and the forward velocity (m/s) of an agent: its mean over the
-    ``n_envs`` environments, their SEM, and whether it walks (``WALKING_SPEED``)."""
+    ``n_envs`` environments, their SEM, and whether it walks (``WALKING_SPEED``); and
+    what the return is made of (``Trainer.window_gait``): the episodes ended per
+    environment, the reward and the control cost per step, each a mean over the
+    environments."""
     trainer = make_trainer(ppo.step_settings())
     key = jax.random.PRNGKey(validation.seed("seed", seed))
-    ret, velocity = trainer.window_gait(params, normalizer, key, n_envs)
-    velocity = np.asarray(velocity, dtype=np.float64)
+    ret, per_env = trainer.window_gait(params, normalizer, key, n_envs)
+    per_env = {k: np.asarray(v, dtype=np.float64) for k, v in per_env.items()}
+    velocity = per_env["velocity"]
     mean = float(velocity.mean())
     return {
         "window_return": float(ret),
         "forward_velocity": mean,
         "forward_velocity_sem": float(velocity.std(ddof=1) / np.sqrt(velocity.size)),
         "walks": mean >= WALKING_SPEED,
+        "episodes_per_env": float(per_env["episodes"].mean()),
+        "reward_per_step": float(per_env["reward"].mean()),
+        "control_cost": float(per_env["control_cost"].mean()),
     }
 
 
@@ -126,25 +137,51 @@ PROFILES = {p: gait_config(p) for p in PROFILE_NAMES}
 
 def regime_gait(results: "RegimeGaitResults | None") -> dict[str, str]:
     """Whether the regime's agents walk (the results of ``sgb.experiments.regime_gait``):
-    each arm's runs' forward speeds by seed (``gait_runs``) and how many walk, at least the
-    file's walking speed (``gait_walks``)."""
+    each arm's runs' forward speeds by seed (``gait_runs``), how many walk, at least the
+    file's walking speed (``gait_walks``), and each arm's episodes ended per environment
+    in the window (``gait_episodes``: 1 where no environment falls twice)."""
     runs = [] if results is None else results.runs
     if not runs:
-        return {"gait_runs": NOT_RUN, "gait_walks": NOT_RUN}
-    arms = []
-    # vanilla first, then from the most cell types to the fewest
-    for k in sorted({r.cell_types for r in runs}, key=lambda k: (k is not None, -(k or 0))):
-        mine = sorted((r for r in runs if r.cell_types == k), key=lambda r: r.seed)
-        speeds = ", ".join(f"{r.forward_velocity:.2f}" for r in mine)
-        seeds = ", ".join(str(r.seed) for r in mine)
-        which = f"seed{'s' * (len(mine) > 1)} {seeds}"
-        arms.append(f"{'vanilla' if k is None else f'{k} types'} {speeds} m/s ({which})")
+        return dict.fromkeys(("gait_runs", "gait_walks", "gait_episodes"), NOT_RUN)
     walking = sum(r.walks for r in runs)
     speed = results.walking_speed
     return {
-        "gait_runs": "; ".join(arms),
+        "gait_runs": _by_arm(runs, lambda r: r.forward_velocity, " m/s"),
         "gait_walks": f"{walking} of the {len(runs)} runs walk (at least {speed:g} m/s)",
+        "gait_episodes": _by_arm(runs, lambda r: r.episodes_per_env, ""),
     }
+
+
+def _by_arm(runs: list["GaitRun"], value: Callable[["GaitRun"], float], unit: str) -> str:
+    """Each arm's runs' ``value`` by seed, vanilla first, then from the most cell types to
+    the fewest: e.g. ``vanilla 7.39, 7.32 m/s (seeds 0, 1); 16 types 1.23 m/s (seed 0)``."""
+    arms = []
+    for k in sorted({r.cell_types for r in runs}, key=lambda k: (k is not None, -(k or 0))):
+        mine = sorted((r for r in runs if r.cell_types == k), key=lambda r: r.seed)
+        values = ", ".join(f"{value(r):.2f}" for r in mine)
+        seeds = ", ".join(str(r.seed) for r in mine)
+        which = f"seed{'s' * (len(mine) > 1)} {seeds}"
+        arms.append(f"{'vanilla' if k is None else f'{k} types'} {values}{unit} ({which})")
+    return "; ".join(arms)
+
+
+GAIT_COLUMNS = {
+    "cell_types": "cell types",
+    "seed": "seed",
+    "window_return": "window return",
+    "forward_velocity": "forward speed (m/s)",
+    "episodes_per_env": "episodes per environment",
+    "reward_per_step": "reward per step",
+    "control_cost": "control cost per step",
+}
+
+
+def gait_table(payload: "RegimeGait") -> pd.DataFrame:
+    """The regime's gaits, one row per run: what its window return is made of (the
+    return is 1000 x the reward per step / the episodes per environment); columns named
+    as ``GAIT_COLUMNS`` maps the file's keys."""
+    runs = pd.DataFrame([r.model_dump() for r in payload.results.runs])[list(GAIT_COLUMNS)]
+    return runs.rename(columns=GAIT_COLUMNS)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -161,6 +198,9 @@ class GaitRun(Record):
     forward_velocity: Speed
     forward_velocity_sem: Annotated[float, Field(ge=0, le=MAX_SPEED)]
     walks: bool
+    episodes_per_env: NonNegative
+    reward_per_step: Finite
+    control_cost: NonNegative
 
 
 class RegimeGaitResults(Record):

@@ -278,14 +278,24 @@ class Trainer:
 
     @cached_property
     def window_gait(self):
-        """Jitted ``(params, normalizer, key, n_envs) -> (return, velocity)``: on the window
-        of ``window_return`` (the same key plays the same steps), its return and each
-        environment's mean forward velocity (m/s, Brax's ``x_velocity``), shape (E,)."""
+        """Jitted ``(params, normalizer, key, n_envs) -> (return, per_env)``: on the window
+        of ``window_return`` (the same key plays the same steps), its return and, for each
+        environment, shape (E,) each: ``velocity``, the mean forward velocity (m/s, Brax's
+        ``x_velocity``); ``episodes``, the episodes that ended in the window; ``reward``
+        and ``control_cost`` (Brax's ``-reward_ctrl``), means per step. The return is
+        ``episode_length * sum(reward) / sum(episodes)``: falls that end episodes early
+        lower it twice, by the reward not earned and by the episodes it is divided by."""
 
         def run(params: Params, normalizer, key: jax.Array, n_envs: int):
             reward, done, metrics = self._window(params, normalizer, key, n_envs)
             ret = jnp.sum(reward) / jnp.maximum(jnp.sum(done), 1.0)
-            return ret, jnp.mean(metrics["x_velocity"], axis=0)
+            per_env = {
+                "velocity": jnp.mean(metrics["x_velocity"], axis=0),
+                "episodes": jnp.sum(done, axis=0),
+                "reward": jnp.mean(reward, axis=0),
+                "control_cost": -jnp.mean(metrics["reward_ctrl"], axis=0),
+            }
+            return ret, per_env
 
         return jax.jit(run, static_argnames="n_envs")
 
