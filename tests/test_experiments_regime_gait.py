@@ -1,12 +1,15 @@
 """``sgb.experiments.regime_gait``: its rows of the scorecard, its texts and its tables, on the
 committed results and on inputs with known effects."""
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
 
-from sgb import prose
+from sgb import grid, prose
 from sgb.experiments import regime_gait
+from sgb.recording import start
+from sgb.rl.regime_runs import RUNS
 
 
 def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
@@ -41,3 +44,28 @@ def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
     made_of = 1000 * table["reward per step"] / table["episodes per environment"]
     assert table["window return"].tolist() == pytest.approx(made_of.tolist())
     assert set(regime_gait.regime_gait(None).values()) == {prose.NOT_RUN}
+
+
+def test_the_queue_lists_a_gait_per_regime_run_and_waits_for_its_training(tmp_path, monkeypatch):
+    """Every run of the regime's profile in its order: one played is done with its wall
+    time, one landed is waiting, one whose training has not landed says so."""
+    runs = RUNS["cpu"].runs
+    landed = {runs[0].checkpoint("cpu"), runs[1].checkpoint("cpu")}
+
+    def checkpoint(r, profile, out_dir):
+        return Path(r.checkpoint(profile)) if r.checkpoint(profile) in landed else None
+
+    monkeypatch.setattr(regime_gait, "_landed", checkpoint)
+    recording = start(regime_gait.PROFILES, "cpu", tmp_path / "rl", "regime_gait_ant")
+    played = {"cell_types": runs[0].cell_types, "seed": runs[0].seed, "genome": runs[0].genome}
+    gait = {"window_return": 7000.0, "forward_velocity": 7.4, "forward_velocity_sem": 0.01}
+    made_of = {"episodes_per_env": 1.0, "reward_per_step": 7.0, "control_cost": 1.4}
+    record = played | gait | made_of | {"walks": True, "wall_time_s": 20.0, "git_commit": "0" * 40}
+    regime_gait._write(recording, [record])
+    queue = regime_gait.queued("cpu", tmp_path)
+    assert queue.results == recording.path and len(queue.runs) == len(runs)
+    first, second, third = queue.runs[:3]
+    assert first.finished and first.wall_time_s == 20.0
+    assert not second.finished and "not landed" not in second.label
+    assert third.label == f"{runs[2].label} seed {runs[2].seed} (its training has not landed)"
+    assert grid.describe(queue)[0] == f"  {runs[0].label} seed {runs[0].seed}: done (0 min)"

@@ -26,11 +26,12 @@ import numpy as np
 import pandas as pd
 from pydantic import Field
 
-from sgb import validation
+from sgb import runlock, validation
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card
-from sgb.provenance import git_commit
-from sgb.recording import Recording, start
+from sgb.provenance import git_commit, results_file
+from sgb.queued import Queue, file_run
+from sgb.recording import Recording, held_results, start
 from sgb.results import Records
 from sgb.rl import checkpoints
 from sgb.rl.ppo import PPOConfig
@@ -99,22 +100,56 @@ def gait(ppo: PPOConfig, params, normalizer, n_envs: int, seed: int) -> dict:
 
 def run(profile: str, out_dir: Path) -> Path:
     """Play every finished regime run of the profile not yet in the results file, writing
-    the file after each; returns its path."""
+    the file after each; returns its path. One process at a time plays into the file
+    (another returns at once): the background queue's workers may both reach it."""
     recording = start(PROFILES, profile, Path(out_dir) / "rl", "regime_gait_ant")
+    with runlock.claim(recording.path.with_suffix("")) as mine:
+        if not mine:
+            print(f"another process is playing into {recording.path}; it is left to it")
+            return recording.path
+        return _play(recording, Path(out_dir))
+
+
+def _play(recording: Recording, out_dir: Path) -> Path:
     config, regime = recording.config, RUNS[recording.config.regime_profile]
     runs = list(recording.earlier().get("runs", []))
     done = {(r["cell_types"], r["seed"], r["genome"]) for r in runs}
     for i, r in enumerate(regime.runs):
         if (r.cell_types, r.seed, r.genome) in done:
             continue
-        name = str(Path(CHECKPOINT_DIR) / r.checkpoint(config.regime_profile))
-        checkpoint = checkpoint_root(Path(out_dir), name) / name
-        if finished_run(checkpoint, run_config(regime, r)) is None:
+        if (checkpoint := _landed(r, config.regime_profile, out_dir)) is None:
             continue
         print(f"regime gait {r.label} seed {r.seed} ({i + 1}/{len(regime.runs)})", flush=True)
         runs.append(_played(r, checkpoint, config))
         _write(recording, runs)
     return _write(recording, runs)
+
+
+def _landed(r: RegimeRun, regime_profile: str, out_dir: Path) -> Path | None:
+    """The checkpoint of regime run ``r`` under ``out_dir`` (else the committed one), or
+    None while its training has not finished."""
+    name = str(Path(CHECKPOINT_DIR) / r.checkpoint(regime_profile))
+    checkpoint = checkpoint_root(out_dir, name) / name
+    finished = finished_run(checkpoint, run_config(RUNS[regime_profile], r))
+    return None if finished is None else checkpoint
+
+
+def queued(profile: str, results_dir: Path) -> Queue:
+    """The gait of every run of the regime at ``profile`` under ``results_dir``, in the
+    order they train, one chunk each, for the background queue (``sgb.grid``), which
+    plays it after the regime's runs; a run whose training has not landed is labelled
+    so."""
+    config = PROFILES[check_profile(profile)]
+    path = results_file(Path(results_dir) / "rl", "regime_gait_ant", profile)
+    runs = held_results(path, config).get("runs", [])
+    played = {(r["cell_types"], r["seed"], r["genome"]): r for r in runs}
+    listed = []
+    for r in RUNS[config.regime_profile].runs:
+        landed = _landed(r, config.regime_profile, Path(results_dir)) is not None
+        label = f"{r.label} seed {r.seed}{'' if landed else ' (its training has not landed)'}"
+        record = played.get((r.cell_types, r.seed, r.genome))
+        listed.append(file_run(label, path, f"{r.label}_s{r.seed}", record))
+    return Queue(path, tuple(listed))
 
 
 def _played(r: RegimeRun, checkpoint: Path, config: GaitConfig) -> dict:
