@@ -232,8 +232,9 @@ def time_left(per_chunk: float, chunks_left: int, into_chunk: float) -> float:
 
 
 def _typical_s(queue: Queue) -> float | None:
-    """The mean wall time (s) of ``queue``'s finished runs, None where none is timed."""
-    times = [r.wall_time_s for r in queue.runs if r.finished and r.wall_time_s]
+    """The mean cost (s of one core, ``QueuedRun.cost_s``) of ``queue``'s finished runs,
+    None where none is timed."""
+    times = [r.cost_s for r in queue.runs if r.finished and r.cost_s]
     return sum(times) / len(times) if times else None
 
 
@@ -244,7 +245,9 @@ def run_left_s(run: QueuedRun, typical_s: float | None, into_chunk: float = 0.0)
     if run.finished:
         return 0.0
     chunk = run.chunks_done
-    per_chunk = run.spent_s / chunk if chunk else (typical_s / run.chunks if typical_s else None)
+    per_chunk = (
+        run.spent_cost_s / chunk if chunk else (typical_s / run.chunks if typical_s else None)
+    )
     return None if per_chunk is None else time_left(per_chunk, run.chunks - chunk, into_chunk)
 
 
@@ -259,6 +262,12 @@ def time_left_s(queue: Queue, into_chunks: Sequence[float] | None = None) -> flo
     return sum(run_left_s(r, typical, i) or 0.0 for r, i in zip(queue.runs, into, strict=True))
 
 
+def _spent(run: QueuedRun) -> str:
+    """A finished run's wall time, and its CPU time where recorded."""
+    cpu = "" if run.cpu_time_s is None else f"; CPU {_hours(run.cpu_time_s)}"
+    return f"{_hours(run.wall_time_s)}{cpu}"
+
+
 def describe(queue: Queue) -> list[str]:
     """A line per run of ``queue``: done (its wall time), running (its process, chunk and
     ETA), or waiting (where it resumes), and a summary line."""
@@ -271,7 +280,7 @@ def describe(queue: Queue) -> list[str]:
         into = time.time() - r.state.stat().st_mtime if pid and r.state.exists() else 0.0
         into_chunks.append(into)
         if r.finished:
-            what = f"done ({_hours(r.wall_time_s)})" if r.wall_time_s else "done"
+            what = f"done ({_spent(r)})" if r.wall_time_s else "done"
         elif pid is not None:
             remaining = run_left_s(r, typical, into)
             eta = "ETA unknown" if remaining is None else f"ETA {_hours(remaining)}"

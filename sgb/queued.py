@@ -11,8 +11,9 @@ class QueuedRun:
     """One run of a queued experiment: its name; its checkpoint (a ``.msgpack`` with its
     ``.json`` sidecar, or for a run whose result goes into the results file, the path its
     lock is taken on); its state file while unfinished; its chunks; how many it has
-    finished and their wall time (s); once finished, its wall time (s); and the files it
-    keeps besides (``kept``: states part-way through, landed as they appear)."""
+    finished and their wall time (s); once finished, its wall time (s); the same two in
+    CPU time (s) where the run records it (``None`` where not); and the files it keeps
+    besides (``kept``: states part-way through, landed as they appear)."""
 
     label: str
     checkpoint: Path
@@ -23,6 +24,19 @@ class QueuedRun:
     chunks_done: int = 0
     spent_s: float = 0.0
     kept: tuple[Path, ...] = ()
+    cpu_time_s: float | None = None
+    spent_cpu_s: float | None = None
+
+    @property
+    def cost_s(self) -> float | None:
+        """What the finished run took of one core: its CPU time where recorded, else its
+        wall time (more, at idle priority, by the time the core gave to other work)."""
+        return self.wall_time_s if self.cpu_time_s is None else self.cpu_time_s
+
+    @property
+    def spent_cost_s(self) -> float:
+        """``cost_s`` of its finished chunks."""
+        return self.spent_s if self.spent_cpu_s is None else self.spent_cpu_s
 
 
 @dataclass(frozen=True)

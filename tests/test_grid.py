@@ -7,6 +7,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+from dataclasses import replace
 from pathlib import Path
 
 import jax
@@ -126,6 +127,21 @@ def test_the_progress_table_counts_runs_and_times_the_rest_by_their_pace(tmp_pat
     assert (a["runs done"], a["part-way"], a["runs"]) == (2, 1, 4)
     assert a["one-core hours left"] == pytest.approx(0.75 + 600 / 3600)
     assert (b["runs done"], b["runs"]) == (0, 1) and np.isnan(b["one-core hours left"])
+    # where runs record their CPU time, it paces them, not the wall time (which counts
+    # what the core gave to other work): the same runs at half their wall time in CPU
+    halved = Queue(
+        tmp_path / "a.json",
+        tuple(
+            replace(
+                r,
+                cpu_time_s=None if r.wall_time_s is None else r.wall_time_s / 2,
+                spent_cpu_s=r.spent_s / 2,
+            )
+            for r in timed.runs
+        ),
+    )
+    assert grid.time_left_s(halved) == pytest.approx(grid.time_left_s(timed) / 2)
+    assert grid.describe(halved)[0] == "  one: done (1.0 h; CPU 30 min)"
 
 
 def _curve(results: Path, name: str) -> tuple[list[float], list[np.ndarray]]:

@@ -4,6 +4,7 @@ no spread at all, vanilla PPO; and the five places where their RL code departs f
 aliased type pairs, the entropy's draw, the normaliser, the initialisation and the
 evaluation."""
 
+import json
 from dataclasses import replace
 
 import jax
@@ -292,7 +293,9 @@ def test_the_authors_evaluate_at_step_0_and_after_every_chunk():
 def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path, monkeypatch):
     """Its state file keeps no environment state (every chunk resets them from the kept
     key), and the resumed run ends bit-identical to one never stopped; a state it keeps
-    (``train``'s ``keep``) holds the agent of its chunk."""
+    (``train``'s ``keep``) holds the agent of its chunk. The CPU time is kept with the
+    state and added to on resuming; from a state saved before runs recorded it, the
+    run's CPU time is unknown rather than short."""
     config = replace(
         _authors(NetworkConfig(hidden=(8,)), total_steps=3 * 2 * 4 * 5 * 2), num_evals=3
     )
@@ -306,9 +309,18 @@ def test_an_authors_run_killed_mid_way_resumes_to_the_uninterrupted_run(tmp_path
         kept = len(saved.files) - 1  # one entry is the meta
     env_leaves = len(jax.tree_util.tree_leaves((ts.env_state, ts.start_state)))
     assert kept == len(jax.tree_util.tree_leaves(ts)) - env_leaves
+    with np.load(state_file) as saved:
+        meta = json.loads(str(saved["meta"]))
+        older = {name: saved[name] for name in saved.files}
+    before = meta["progress"].pop("cpu_time_s")
+    older_state = tmp_path / "older.state.npz"
+    np.savez(older_state, **(older | {"meta": np.array(json.dumps(meta))}))
     kept = {1: tmp_path / "run.chunk1.npz", 3: tmp_path / "run.chunk3.npz"}
     resumed = train(config, seed=1, progress=False, state_file=state_file, keep=kept)
-    assert resumed.eval_returns == uninterrupted.eval_returns
+    assert resumed.cpu_time_s > before > 0
+    from_older = train(config, seed=1, progress=False, state_file=older_state)
+    assert from_older.cpu_time_s is None
+    assert from_older.eval_returns == resumed.eval_returns == uninterrupted.eval_returns
     _assert_same_params(resumed.params, uninterrupted.params)
     # the states it keeps: chunk 1 was trained before the kill, so only chunk 3's is
     # written, and it is the agent the run ends with; keeping changes nothing trained

@@ -91,6 +91,8 @@ def queued(profile: str, results_dir: Path) -> Queue:
                 chunks_done=progress.get("chunks", 0),
                 spent_s=progress.get("wall_time_s", 0.0),
                 kept=tuple(kept_state(checkpoint, chunk) for chunk in kept_chunks(r)),
+                cpu_time_s=None if record is None else record.get("cpu_time_s"),
+                spent_cpu_s=progress.get("cpu_time_s"),
             )
         )
     return Queue(results_file(Path(results_dir) / "rl", "regime_ant", profile), tuple(runs))
@@ -306,13 +308,15 @@ REGIME_COLUMNS = {
     "authors_scale": "final, authors' scale",
     "train_steps_per_s": "env steps/s",
     "wall_time_s": "wall time (s)",
+    "cpu_time_s": "CPU time (s)",
 }
 
 
 def regime_table(payload: "Regime") -> pd.DataFrame:
     """The authors' regime (``sgb.experiments.regime``), one row per run: final and
     last-two evaluation returns, the final one on the authors' Figure 3 scale, training
-    env-steps/s and wall time; columns named as ``REGIME_COLUMNS`` maps the files' keys."""
+    env-steps/s, wall time and CPU time ("-" where not recorded); columns named as
+    ``REGIME_COLUMNS`` maps the files' keys."""
     runs = pd.DataFrame([r.model_dump() for r in payload.results.runs])[list(REGIME_COLUMNS)]
     return runs.rename(columns=REGIME_COLUMNS)
 
@@ -332,6 +336,7 @@ class RegimeRun(Training):
     authors_scale: Finite
     train_steps_per_s: Positive
     wall_time_s: Seconds
+    cpu_time_s: Seconds | None = None  # absent from runs trained before runs recorded it
 
 
 class RegimeSummary(Record):

@@ -101,6 +101,7 @@ def save(path: str | Path, result: TrainResult, record: dict[str, Any] | None = 
         "eval_sigmas": result.eval_sigmas,
         "train_steps_per_s": result.train_steps_per_s,
         "wall_time_s": result.wall_time_s,
+        "cpu_time_s": result.cpu_time_s,
         "provenance": record or {},
         "sha256": _sha256(data),
     }
@@ -237,6 +238,9 @@ def _check_fields(sidecar: Path, meta: dict[str, Any]) -> None:
     for key in ("train_steps_per_s", "wall_time_s"):
         if not (number(meta.get(key)) and meta[key] >= 0):
             problems.append(f"{key} is not a number >= 0")
+    cpu = meta.get("cpu_time_s")  # absent or null where the run did not record it
+    if cpu is not None and not (number(cpu) and cpu >= 0):
+        problems.append("cpu_time_s is neither null nor a number >= 0")
     if not isinstance(meta.get("provenance", {}), dict):
         problems.append("provenance is not an object")
     if problems:

@@ -166,6 +166,9 @@ class TrainResult:
     # per evaluation, the actor's mean sigma per SGB layer (``genome.layer_sigmas``); None
     # for an evaluation made before runs recorded it
     eval_sigmas: list[dict[str, float] | None] = field(default_factory=list)
+    # the CPU time of the processes that trained it (s, all their threads; a pause does not
+    # count); None for a run resumed from a state saved before runs recorded it
+    cpu_time_s: float | None = None
 
 
 def _keys(seed: int) -> list[jax.Array]:
@@ -327,7 +330,7 @@ def train(
     path): the state after that chunk is also written there and kept, the agent as it was
     at that point of training (``state_agent``); what is trained is the same.
     """
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     ts = init_state(config, seed, initial)
     run = {"config": repr(config), "seed": seed}
     done = {
@@ -346,14 +349,25 @@ def train(
             progress_keys=tuple(done),
             finite=lambda ts: (ts.params, ts.normalizer),
         )
-        # a state saved before runs recorded their spreads has none for its chunks
+        # a state saved before runs recorded their spreads has none for its chunks, and
+        # one saved before they recorded their CPU time leaves the run's unknown
         done.setdefault("eval_sigmas", [None] * len(done["eval_steps"]))
+        done.setdefault("cpu_time_s", None)
         ts = (
             kept._replace(env_state=ts.env_state, start_state=ts.start_state)
             if (config.regime == "authors")
             else kept
         )
     done.setdefault("eval_sigmas", [])
+    done.setdefault("cpu_time_s", 0.0)
+
+    def spent() -> dict:  # the wall and CPU time of the run so far, this call's added
+        cpu = done["cpu_time_s"]
+        return {
+            "wall_time_s": done["wall_time_s"] + time.perf_counter() - start,
+            "cpu_time_s": None if cpu is None else cpu + time.process_time() - cpu_start,
+        }
+
     holder = {"ts": ts}
     guard = _guard(holder)
     chunk = max(1, config.iterations // config.num_evals)
@@ -384,10 +398,10 @@ def train(
         done["eval_returns"].append(ret)
         done["eval_sigmas"].append(layer_sigmas(ts.params.actor))
         done["chunks"] = i + 1
-        elapsed = done["wall_time_s"] + time.perf_counter() - start
+        so_far = spent()
         for path in [state_file, (keep or {}).get(i + 1)]:
             if path is not None:
-                resume.save(path, _kept(ts, config), run, {**done, "wall_time_s": elapsed})
+                resume.save(path, _kept(ts, config), run, {**done, **so_far})
     return TrainResult(
         config=config,
         params=ts.params,
@@ -395,6 +409,6 @@ def train(
         eval_steps=done["eval_steps"],
         eval_returns=done["eval_returns"],
         train_steps_per_s=done["timed_steps"] / max(done["timed_s"], 1e-9),
-        wall_time_s=done["wall_time_s"] + time.perf_counter() - start,
         eval_sigmas=done["eval_sigmas"],
+        **spent(),
     )

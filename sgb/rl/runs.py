@@ -110,9 +110,9 @@ def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
     """The record kept in ``checkpoint`` if it holds a run trained with ``ppo`` (``None``
     if there is none, or it was trained with other settings; its intermediate evaluations
     may have had another size, ``PPOConfig.trains_as``): its learning curve, its
-    scores (the last evaluation; the mean of the last two), its speed, wall time and
-    the commit and date it was trained at. A damaged checkpoint counts as none (it is said
-    so), so that the sweep trains the run again."""
+    scores (the last evaluation; the mean of the last two), its speed, wall time, CPU time
+    (where recorded) and the commit and date it was trained at. A damaged
+    checkpoint counts as none (it is said so), so that the sweep trains the run again."""
     if not checkpoint.exists():
         return None
     try:
@@ -129,6 +129,7 @@ def finished_run(checkpoint: Path, ppo: PPOConfig) -> dict | None:
         "last_two_return": float(np.mean(returns[-2:])),
         **{key: meta[key] for key in ("eval_steps", "eval_returns", "train_steps_per_s")},
         "wall_time_s": meta["wall_time_s"],
+        **({"cpu_time_s": meta["cpu_time_s"]} if meta.get("cpu_time_s") is not None else {}),
         **({"eval_sigmas": meta["eval_sigmas"]} if meta.get("eval_sigmas") else {}),
         "git_commit": trained.get("git_commit", "not recorded"),
         "date": trained.get("date", "not recorded"),
