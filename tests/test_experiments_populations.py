@@ -161,6 +161,7 @@ def test_a_smoke_run_resumes_without_evaluating_again(tmp_path, monkeypatch, cap
     for record in results["genomes"].values():
         for part in populations.PARTS:
             assert np.asarray(record["parts"][part]["returns"]).shape == (4, 3)
+            assert record["parts"][part]["cpu_time_s"] > 0  # what it cost, pauses not counted
         returns = {p: record["parts"][p]["returns"] for p in populations.PARTS}
         recomputed = json.loads(json.dumps(jsonable(populations.genome_summary(returns))))
         assert record["summary"] == recomputed  # the summary is the stored returns' own

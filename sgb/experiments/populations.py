@@ -561,14 +561,15 @@ def _evaluate(recording: Recording, out_dir: Path) -> Path:
         if label not in agents:
             agents = {label: genome_agent(genome, config, out_dir)}
         with runlock.exclusive(run_lock(path, label)):  # held while its parts are evaluated
-            tic = time.perf_counter()
+            tic, cpu = time.perf_counter(), time.process_time()
             returns = evaluate_part(agents[label], part, config, config.seed + j)
-            wall = time.perf_counter() - tic
+            wall, cpu = time.perf_counter() - tic, time.process_time() - cpu
         record = results["genomes"].setdefault(label, _new_record(genome, j, config, env))
         record["checkpoint_sha256"] = digests[label]
         record["parts"][part] = {
             "returns": returns,
             "wall_time_s": round(wall, 2),
+            "cpu_time_s": round(cpu, 2),
             "env_steps_per_s": round(steps / wall, 1),
             "git_commit": git_commit(),
         }
@@ -604,9 +605,18 @@ def queued(profile: str, results_dir: Path) -> Queue:
                 wall_time_s=sum(p["wall_time_s"] for p in done) if done else None,
                 chunks_done=len(done),
                 spent_s=sum(p["wall_time_s"] for p in done),
+                cpu_time_s=_cpu_time(done) if done else None,
+                spent_cpu_s=_cpu_time(done),
             )
         )
     return Queue(path, tuple(runs))
+
+
+def _cpu_time(parts: list[dict]) -> float | None:
+    """The CPU time (s) of a genome's evaluated ``parts``; None where one of them was
+    evaluated before parts recorded it."""
+    times = [p.get("cpu_time_s") for p in parts]
+    return None if None in times else sum(times)
 
 
 def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> dict:
