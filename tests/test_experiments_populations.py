@@ -378,6 +378,19 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
         if "9.83 x 10^6 steps" in r.setting
     ]
     assert [r.key for r in added] == ["fig4e.r_legs"]
+    # a 64-type genome part-way through its parts (ours come first, no sampled one yet)
+    # is a valid file that adds no row
+    genomes["k64_s2"] = {
+        "cell_types": 64,
+        "training_seed": 2,
+        "trained_steps": 50_000_000,
+        "parts": {"normal": {"returns": rng.normal(2000, 300, (100, 64)).tolist()}},
+    }
+    stored = json.loads(json.dumps(jsonable({"genomes": genomes})))
+    partway = populations.RegimePopulationsResults.model_validate(stored)
+    assert population_runs.regime_population_rows(
+        partway
+    ) == population_runs.regime_population_rows(results)
     # the same genome at two points: individuals without a skill of their own part-way,
     # 15 % of the return apart at the end, told apart only there
     course = population_runs.regime_populations(SimpleNamespace(results=results))

@@ -1105,7 +1105,8 @@ class RegimePopulationSummary(Record):
 
 
 class SampledPart(Record):
-    sampled: ReturnsPart
+    # a 64-type genome plays our protocol's parts first: None until its sampled part is in
+    sampled: ReturnsPart = None
 
 
 class RegimePopulationGenome(Record):
