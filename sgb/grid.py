@@ -57,14 +57,15 @@ LOGS = "grid-logs"  # in the worktree: a log and a lock per worker
 # landed (20-40 min of one core against 2.5 h a run), so a genome is measured as it lands.
 # Chapter 6's evolution, about 70 min of one core, goes ahead of them (it answers its
 # question in one sitting, against 27 h of the regime's); its bet-hedging genomes (about
-# 8 h) come last. The regime's gaits (20 s a run) follow its runs, so that each finished
-# run has its walking speed.
+# 8 h) come last. The regime's gaits (20 s a run) go first of the regime's experiments:
+# a worker stays with the regime's runs until none is left, so each start of the queue
+# plays the runs landed since the last.
 QUEUE = (
     ("dgb_high", "cpu"),
     ("evolution", "cpu"),
+    ("regime_gait", "cpu"),
     ("regime_populations", "cpu"),
     ("regime", "cpu"),
-    ("regime_gait", "cpu"),
     ("sgb_high", "cpu"),
     ("width", "cpu"),
     ("bet_hedging", "cpu"),

@@ -422,7 +422,8 @@ EXPERIMENTS: dict[str, Experiment] = {
         costs={
             "smoke": "2 windows of 4 x 64 steps, not measured",
             "cpu": "256 x 1000 env-steps per finished regime run, 15-24 s of one core each "
-            "(11 runs: 200 s); resumable; in the background queue after the regime",
+            "(11 runs: 200 s); resumable; in the background queue, which plays the runs landed "
+            "since it last started",
             "paper": "the cpu runs; not measured on a GPU",
         },
         results={"": "rl/regime_gait_ant_cpu.json"},

@@ -137,8 +137,8 @@ def _landed(r: RegimeRun, regime_profile: str, out_dir: Path) -> Path | None:
 def queued(profile: str, results_dir: Path) -> Queue:
     """The gait of every run of the regime at ``profile`` under ``results_dir``, in the
     order they train, one chunk each, for the background queue (``sgb.grid``), which
-    plays it after the regime's runs; a run whose training has not landed is labelled
-    so."""
+    plays the landed ones each time it starts; a run whose training has not landed is
+    labelled so."""
     config = PROFILES[check_profile(profile)]
     path = results_file(Path(results_dir) / "rl", "regime_gait_ant", profile)
     runs = held_results(path, config).get("runs", [])
