@@ -85,6 +85,11 @@ def test_the_texts_are_the_files_values():
     assert texts["regime_vanilla"].endswith(f"over {len(vanilla)} seed" + "s" * (len(vanilla) > 1))
     wall = np.mean([r.wall_time_s for r in vanilla])
     assert texts["regime_wall"] == f"{wall / 3600:.1f} h"
+    timed = [r.cpu_time_s for r in regime.results.runs if r.cpu_time_s is not None]
+    if timed:
+        assert texts["regime_cpu"].startswith(f"{np.mean(timed) / 3600:.1f} h ({len(timed)} of ")
+    else:
+        assert texts["regime_cpu"] == "not recorded by the runs finished so far"
     assert texts["regime_steps"] == f"{int(vanilla[0].eval_steps[-1]):,}"  # all digits
     bench = RECORDS("bench_backends").results.throughput
     ratio = bench["mjx"].train_steps_per_s / bench["spring"].train_steps_per_s

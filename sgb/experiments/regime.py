@@ -244,10 +244,20 @@ def _seeds(n: int) -> str:
     return f"{n} seed" + ("" if n == 1 else "s")
 
 
+def _cpu_per_run(runs: list["RegimeRun"]) -> str:
+    """The mean CPU time of the runs, of every arm, that recorded it (a pause and the
+    time their core gave to other work not counted)."""
+    timed = [r.cpu_time_s for r in runs if r.cpu_time_s is not None]
+    if not timed:
+        return "not recorded by the runs finished so far"
+    return f"{np.mean(timed) / 3600:.1f} h ({len(timed)} of {len(runs)} runs recorded it)"
+
+
 def regime(payload: "Regime") -> dict[str, str]:
     """The authors' regime (``rl/regime_ant_cpu.json``), from its summary per arm (mean
     final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
-    on the authors' scale, its mean env-steps/s and wall time per run (``regime_*``),
+    on the authors' scale, its mean env-steps/s and wall time per run, the mean CPU time
+    per run of any arm where recorded (``regime_*``),
     ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds, and the
     scorecard's rows of the level at 128 types, the fall to 16 and the fall's shape with
     the authors' genome (``regime_level``, ``regime_fall``, ``regime_shape``: estimate,
@@ -277,6 +287,7 @@ def regime(payload: "Regime") -> dict[str, str]:
         "regime_vanilla_scale": f"{vanilla.mean_authors_scale:.2f}",
         "regime_speed": f"{np.mean([r.train_steps_per_s for r in mine]):,.0f}",
         "regime_wall": f"{np.mean([r.wall_time_s for r in mine]) / 3600:.1f} h",
+        "regime_cpu": _cpu_per_run(runs),
         "regime_sgb": "; ".join(
             f"{s.cell_types} types"
             + ("" if s.genome == "authors" else ", pairs aliased")
