@@ -55,7 +55,10 @@ def run_lock(results: Path, name: str) -> Path:
 
 def file_run(label: str, results: Path, name: str, record: dict | None) -> QueuedRun:
     """A run of one chunk whose result is ``record`` (``None`` until it is written) in the
-    results file ``results``, locked at ``run_lock``."""
+    results file ``results``, locked at ``run_lock``; its CPU time where the record has
+    it."""
     lock = run_lock(results, name)
     wall = None if record is None else record["wall_time_s"]
-    return QueuedRun(label, lock, lock.with_suffix(".state.npz"), 1, record is not None, wall)
+    cpu = None if record is None else record.get("cpu_time_s")
+    state = lock.with_suffix(".state.npz")
+    return QueuedRun(label, lock, state, 1, record is not None, wall, cpu_time_s=cpu)

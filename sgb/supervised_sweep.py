@@ -7,7 +7,6 @@ runs and the experiments beside it reuse.
 
 import dataclasses
 import math
-import time
 from typing import Any
 
 import numpy as np
@@ -22,6 +21,7 @@ from sgb.provenance import git_commit
 from sgb.schemas import Accuracy, Compression, Finite, NonNegative, Record, Seed
 from sgb.stats import crossings, sem
 from sgb.supervised import ClassifierConfig, DenseConfig, train_and_evaluate
+from sgb.timing import timed
 
 _RATIO_KEYS = {"ours": "compression", "authors": "compression_authors"}
 
@@ -85,8 +85,14 @@ def sweep_cells(sweep: CompressionSweep, sizes: tuple[int, ...]) -> list[tuple[s
 
 
 def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: CompressionSweep) -> dict:
-    """Train one model and evaluate it innately; a flat record of the sweep."""
-    start = time.perf_counter()
+    """Train one model and evaluate it innately; a flat record of the sweep, with its
+    wall and CPU time."""
+    with timed() as spent:
+        record = _trained(kind, setting, seed, data, sweep)
+    return record | spent
+
+
+def _trained(kind: str, setting: int, seed: int, data: Dataset, sweep: CompressionSweep) -> dict:
     shape = {"hidden": sweep.hidden, "conv_features": sweep.conv_features, "seed": seed}
     sizes = dense_sizes(data.x_train.shape[1:], sweep.conv_features, sweep.hidden, data.num_classes)
     record: dict[str, Any] = {"model": kind, "setting": setting, "seed": seed}
@@ -122,7 +128,6 @@ def run_one(kind: str, setting: int, seed: int, data: Dataset, sweep: Compressio
             kind, sizes, setting, sweep.in_types, sweep.out_types, convention, sweep.dgb.layout
         )
     record["git_commit"] = git_commit()
-    record["wall_time_s"] = round(time.perf_counter() - start, 2)
     return record
 
 

@@ -69,6 +69,7 @@ def test_conv_classifiers_run_on_images():
         assert 0.0 <= record["accuracy"] <= 1.0
         assert record["compression"] == compression(kind, (64, 12, 3), setting, 8, 3)
         assert record["compression_authors"] > record["compression"]
+        assert record["cpu_time_s"] > 0  # what the cell cost, beside its wall time
 
 
 def test_uncompressed_baseline_learns_digits():

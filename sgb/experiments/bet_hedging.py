@@ -33,7 +33,6 @@ genome is kept in the results file, written after every genome under a lock, so 
 processes share the work (``sgb.grid``).
 """
 
-import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
@@ -71,6 +70,7 @@ from sgb.schemas import (
     Seconds,
     Seed,
 )
+from sgb.timing import timed
 
 DETERMINISTIC_RHO = -30.0  # sigma = softplus(-30) = 9.4e-14: the deterministic lineage
 POPULATIONS = ("individuals", "clones")
@@ -160,7 +160,14 @@ def run_genome(
     """Every population of one trained genome on every condition; its record. The scale is
     the mean network's mean return on the normal body over the selection episodes (the
     lineage's own members')."""
-    began = time.perf_counter()
+    with timed() as spent:
+        record = _evaluated(config, rho_init, seed, j, checkpoint)
+    return record | spent  # the evaluation's wall and CPU time
+
+
+def _evaluated(
+    config: HedgingConfig, rho_init: float, seed: int, j: int, checkpoint: Path
+) -> dict[str, Any]:
     ppo, actor, normalizer = load_agent(checkpoint)
     deterministic = rho_init == DETERMINISTIC_RHO
     populations = POPULATIONS[:1] if deterministic else POPULATIONS
@@ -179,6 +186,7 @@ def run_genome(
                 mean_network=population == "clones",
             )
             returns[population][variant] = np.round(np.asarray(r, np.float64), DECIMALS)
+    trained = finished_run(checkpoint, ppo)
     home = populations[-1]  # the clones, or the lineage's members
     scale = round(float(returns[home]["normal"][:, : config.episodes].mean()), DECIMALS + 2)
     return {
@@ -187,7 +195,8 @@ def run_genome(
         "evaluation_seed": config.seed + j,
         "checkpoint": checkpoint.name,
         "sigma_trained": mean_sigma(actor),
-        "training_wall_time_s": finished_run(checkpoint, ppo)["wall_time_s"],
+        "training_wall_time_s": trained["wall_time_s"],
+        "training_cpu_time_s": trained.get("cpu_time_s"),
         "scale": scale,
         "returns": {p: {v: r.tolist() for v, r in returns[p].items()} for p in populations},
         "scores": {
@@ -195,7 +204,6 @@ def run_genome(
             for p in populations
         },
         "git_commit": git_commit(),
-        "wall_time_s": round(time.perf_counter() - began, 2),  # the evaluation's
     }
 
 
@@ -277,13 +285,22 @@ def queued(profile: str, results_dir: Path) -> Queue:
                 state=state,
                 chunks=chunks + 1,
                 finished=record is not None,
-                wall_time_s=None if record is None else record["wall_time_s"],
+                wall_time_s=None if record is None else _cost(record, "wall_time_s"),
                 chunks_done=chunks if trained else progress.get("chunks", 0),
                 spent_s=progress.get("wall_time_s", 0.0),
+                cpu_time_s=None if record is None else _cost(record, "cpu_time_s"),
+                spent_cpu_s=progress.get("cpu_time_s"),
                 kept=(checkpoint, checkpoint.with_suffix(".json")),
             )
         )
     return Queue(path, tuple(runs))
+
+
+def _cost(record: dict, key: str) -> float | None:
+    """A genome's training and evaluation together, in ``key`` (``wall_time_s`` or
+    ``cpu_time_s``); None where either was not recorded."""
+    parts = (record.get(f"training_{key}"), record.get(key))
+    return None if None in parts else sum(parts)
 
 
 def hedging_config(profile: str) -> HedgingConfig:
@@ -508,6 +525,7 @@ class HedgingGenome(Record):
     training_seed: Seed
     sigma_trained: NonNegative
     training_wall_time_s: Seconds | None = None
+    training_cpu_time_s: Seconds | None = None
     scale: Return
     returns: HedgingReturns
     scores: HedgingScores

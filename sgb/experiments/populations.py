@@ -100,6 +100,7 @@ from sgb.schemas import (
     Seed,
     StoredTest,
 )
+from sgb.timing import timed
 
 BODIES = ("normal", "long_legs")
 PARTS = (*BODIES, "mean_network")  # the mean network plays the normal body
@@ -560,17 +561,14 @@ def _evaluate(recording: Recording, out_dir: Path) -> Path:
         print(f"{name} {label} {part} ({count}/{len(plan)}): ETA {_clock(eta)}", flush=True)
         if label not in agents:
             agents = {label: genome_agent(genome, config, out_dir)}
-        with runlock.exclusive(run_lock(path, label)):  # held while its parts are evaluated
-            tic, cpu = time.perf_counter(), time.process_time()
+        with runlock.exclusive(run_lock(path, label)), timed() as spent:  # held meanwhile
             returns = evaluate_part(agents[label], part, config, config.seed + j)
-            wall, cpu = time.perf_counter() - tic, time.process_time() - cpu
         record = results["genomes"].setdefault(label, _new_record(genome, j, config, env))
         record["checkpoint_sha256"] = digests[label]
         record["parts"][part] = {
             "returns": returns,
-            "wall_time_s": round(wall, 2),
-            "cpu_time_s": round(cpu, 2),
-            "env_steps_per_s": round(steps / wall, 1),
+            **spent,
+            "env_steps_per_s": round(steps / spent["wall_time_s"], 1),
             "git_commit": git_commit(),
         }
         _write(recording, summarise(results, config))

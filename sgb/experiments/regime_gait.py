@@ -15,7 +15,6 @@ The runs are those of the regime's profile; a run not yet trained is left out (a
 by a later run of this experiment), one already in the results file is not evaluated again.
 """
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +50,7 @@ from sgb.schemas import (
     Seed,
     Speed,
 )
+from sgb.timing import timed
 
 WALKING_SPEED = 1.0  # m/s: the forward reward per step equals the healthy reward (1)
 
@@ -153,12 +153,11 @@ def queued(profile: str, results_dir: Path) -> Queue:
 
 
 def _played(r: RegimeRun, checkpoint: Path, config: GaitConfig) -> dict:
-    tic = time.perf_counter()
-    ppo, params, normalizer, _ = checkpoints.load(checkpoint)
-    record = gait(ppo, params, normalizer, config.n_envs, config.seed)
-    wall = time.perf_counter() - tic
+    with timed() as spent:
+        ppo, params, normalizer, _ = checkpoints.load(checkpoint)
+        record = gait(ppo, params, normalizer, config.n_envs, config.seed)
     run = {"cell_types": r.cell_types, "seed": r.seed, "genome": r.genome}
-    return {**run, **record, "wall_time_s": round(wall, 2), "git_commit": git_commit()}
+    return {**run, **record, **spent, "git_commit": git_commit()}
 
 
 def _write(recording: Recording, runs: list[dict]) -> Path:
