@@ -247,10 +247,10 @@ def _seeds(n: int) -> str:
 def _cpu_per_run(runs: list["RegimeRun"]) -> str:
     """The mean CPU time of the runs, of every arm, that recorded it (a pause and the
     time their core gave to other work not counted)."""
-    timed = [r.cpu_time_s for r in runs if r.cpu_time_s is not None]
-    if not timed:
+    recorded = [r.cpu_time_s for r in runs if r.cpu_time_s is not None]
+    if not recorded:
         return "not recorded by the runs finished so far"
-    return f"{np.mean(timed) / 3600:.1f} h ({len(timed)} of {len(runs)} runs recorded it)"
+    return f"{np.mean(recorded) / 3600:.1f} h ({len(recorded)} of {len(runs)} runs recorded it)"
 
 
 def regime(payload: "Regime") -> dict[str, str]:

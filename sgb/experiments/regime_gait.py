@@ -173,7 +173,8 @@ def regime_gait(results: "RegimeGaitResults | None") -> dict[str, str]:
     """Whether the regime's agents walk (the results of ``sgb.experiments.regime_gait``):
     each arm's runs' forward speeds by seed (``gait_runs``), how many walk, at least the
     file's walking speed (``gait_walks``), and each arm's episodes ended per environment
-    in the window (``gait_episodes``: 1 where no environment falls twice)."""
+    in the window (``gait_episodes``: 1 where no agent falls more than once in an
+    environment, ``Trainer.window_gait``)."""
     runs = [] if results is None else results.runs
     if not runs:
         return dict.fromkeys(("gait_runs", "gait_walks", "gait_episodes"), NOT_RUN)

@@ -283,8 +283,9 @@ class Trainer:
         environment, shape (E,) each: ``velocity``, the mean forward velocity (m/s, Brax's
         ``x_velocity``); ``episodes``, the episodes that ended in the window; ``reward``
         and ``control_cost`` (Brax's ``-reward_ctrl``), means per step. The return is
-        ``episode_length * sum(reward) / sum(episodes)``: falls that end episodes early
-        lower it twice, by the reward not earned and by the episodes it is divided by."""
+        ``episode_length * sum(reward) / sum(episodes)``. An environment whose agent falls
+        k >= 1 times ends k episodes in the window (the one it restarts does not end there),
+        one that never falls ends one: every fall after the first divides the return."""
 
         def run(params: Params, normalizer, key: jax.Array, n_envs: int):
             reward, done, metrics = self._window(params, normalizer, key, n_envs)
