@@ -42,7 +42,7 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from sgb import cluster, gather, recording, runlock
+from sgb import cluster, gather, manifest, recording, runlock
 from sgb.manifest import MAINTAINER_FLAG, add
 from sgb.provenance import atomic_write
 from sgb.queued import Queue, QueuedRun
@@ -383,6 +383,15 @@ def land(source: Path, target: Path, queue: tuple[tuple[str, str], ...] = QUEUE)
     return Landed(changed, results)
 
 
+def unentered(target: Path, queue: tuple[tuple[str, str], ...] = QUEUE) -> list[Path]:
+    """The queued experiments' results files in ``target`` whose bytes its manifest does
+    not hold: landed by a landing that stopped before entering them (a file its schema
+    refused), to be entered by the next."""
+    known = manifest.entries(target)
+    files = [q.results for _, _, q in queues(target, queue) if q.results.exists()]
+    return [f for f in files if known.get(f.relative_to(target).as_posix()) != manifest.digest(f)]
+
+
 # --- the command line -------------------------------------------------------------------
 
 
@@ -422,7 +431,8 @@ def main(argv: list[str], reproduce: Callable[[list[str]], int]) -> int:
             print(f"no worktree at {tree}: no workers have run here, nothing to land")
         else:
             landed = land(tree / "results", REPOSITORY / "results")
-            entered = add(landed.results, gather.model_of) if landed.results else []
+            enter = sorted({*landed.results, *unentered(REPOSITORY / "results")})
+            entered = add(enter, gather.model_of) if enter else []
             for path in landed.runs + landed.results:
                 print(f"landed {path.relative_to(REPOSITORY)}")
             print(

@@ -2,6 +2,7 @@
 its listing reads who holds a run without taking it, and a run's state landed in the
 repository lets a fresh copy resume it at the chunk it had reached, bit for bit."""
 
+import json
 import os
 import shutil
 import subprocess
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 from interrupt import killed_at_chunk
 
-from sgb import grid, recording, runlock
+from sgb import grid, manifest, recording, runlock
 from sgb.experiments import regime
 from sgb.rl import checkpoints, regime_runs
 from sgb.rl.trainer import make_trainer
@@ -239,3 +240,16 @@ def test_a_folder_left_where_the_worktree_goes_gives_way_unless_it_holds_files(
     with pytest.raises(RuntimeError, match="not a worktree"):
         grid.prepare(other, SMOKE)
     assert (other / "notes.txt").read_text() == "mine\n"
+
+
+def test_a_results_file_landed_but_not_entered_is_entered_by_the_next_landing(tmp_path):
+    """A landing that stopped after copying a results file (its schema refused it) leaves
+    bytes the manifest does not hold: the next landing enters them, whether or not it
+    copies anything; once entered, nothing is left."""
+    results = tmp_path / "rl" / "regime_ant_smoke.json"
+    results.parent.mkdir()
+    results.write_text('{"landed": 1}\n')
+    assert grid.unentered(tmp_path, SMOKE) == [results]
+    entered = {"sha256": {"rl/regime_ant_smoke.json": manifest.digest(results)}}
+    (tmp_path / manifest.NAME).write_text(json.dumps(entered))
+    assert grid.unentered(tmp_path, SMOKE) == []
