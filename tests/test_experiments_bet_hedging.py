@@ -2,11 +2,12 @@
 and the deterministic lineage it rests on."""
 
 import json
+from types import SimpleNamespace
 
 import jax
 import numpy as np
 
-from sgb import verdicts
+from sgb import prose, verdicts
 from sgb.experiments import bet_hedging
 from sgb.experiments.bet_hedging import DETERMINISTIC_RHO, population_scores
 from sgb.rl.agent import NetworkConfig, make_agent
@@ -81,6 +82,20 @@ def test_the_rows_credit_individuals_whose_survivors_pass_again_and_not_episode_
     assert middle[2].verdict == verdicts.NOT_TESTABLE and "+0.00" in middle[2].decide
     for row in narrow[:4]:  # individuals are the clones
         assert row.verdict == verdicts.NOT_TESTABLE and "+0.00" in row.decide
+
+    # chapter 6 tells each spread in one passage, its declared row first
+    payload = SimpleNamespace(results=bet_hedging.BetHedgingResults.model_validate(results))
+    texts = bet_hedging.bet_hedging(payload)
+    assert texts["hedge_status"].startswith("genomes landed: rho from -5 4 of 15; ")
+    assert "the lineage 4 of 15 (trained sigma" in texts["hedge_status"]
+    passage = texts["hedge_middle"]
+    assert passage.startswith("4 genomes, trained sigma ")
+    declared = f"individuals minus clones: {survival.ours}, **{survival.verdict}** (would decide"
+    assert declared in passage
+    assert f"against the lineage: {lineage.ours}, **{lineage.verdict}**" in passage
+    none = bet_hedging.bet_hedging(None)
+    assert none["hedge_status"].startswith("not yet run: its 45 genomes")
+    assert none["hedge_narrow"] == none["hedge_middle"] == prose.NOT_RUN
 
 
 def test_the_deterministic_lineage_plays_its_mean_network_bit_for_bit():

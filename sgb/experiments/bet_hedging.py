@@ -408,61 +408,84 @@ SPREAD_NAMES = {-5.0: "narrow", -3.0: "middle"}
 
 
 def bet_hedging(payload: "BetHedging | None") -> dict[str, str]:
-    """Bet-hedging (``rl/bet_hedging_ant_cpu.json``): the design (``hedge_design``), the
-    lineage's sigma and home return (``hedge_lineage``) and, per stochastic spread
-    (``narrow``: rho from -5; ``middle``: -3), its trained sigma (``hedge_{name}_sigma``),
-    its populations' mean returns over conditions, members and genomes
-    (``hedge_{name}_returns``) and its rows: declared survival (``hedge_{name}_survival``),
-    at least 10 and 50 (``hedge_{name}_k10``, ``hedge_{name}_k50``), geometric fitness
-    (``hedge_{name}_geometric``), against the lineage (``hedge_{name}_lineage``);
-    ``NOT_RUN`` for all without the file, or where too few genomes have landed."""
-    texts = {"hedge_design": NOT_RUN, "hedge_lineage": NOT_RUN}
-    rows = ("survival", "k10", "k50", "geometric", "lineage")
-    for name in SPREAD_NAMES.values():
-        texts[f"hedge_{name}_sigma"] = texts[f"hedge_{name}_returns"] = NOT_RUN
-        for row in rows:
-            texts |= row_texts(f"hedge_{name}_{row}", None)
-    if payload is None:
-        return texts
-    genomes = payload.results.genomes
-    lineage = [g for g in genomes if g.rho_init == DETERMINISTIC_RHO]
-    if lineage:
-        sigma = np.mean([g.sigma_trained for g in lineage])
-        texts["hedge_lineage"] = (
-            f"{len(lineage)} genomes, trained sigma {sigma:.1e}, "
-            f"home return {np.mean([g.scale for g in lineage]):.0f}"
-        )
-    card = claims.by_key(bet_hedging_rows(payload.results))
-    keys = {
-        "survival": ("ch6.hedging_survival", f"at least {PRIMARY[1]} survive"),
-        "k10": ("ch6.hedging_survival", "at least 10 survive"),
-        "k50": ("ch6.hedging_survival", "at least 50 survive"),
-        "geometric": ("ch6.hedging_geometric", ""),
-        "lineage": ("ch6.hedging_lineage", ""),
-    }
+    """Bet-hedging (``rl/bet_hedging_ant_cpu.json``) as chapter 6 tells it: where the
+    design stands (``hedge_status``: the genomes landed per spread and the lineage's, or
+    that none has) and, per stochastic spread (``narrow``: rho from -5; ``middle``: -3),
+    its trained sigma, its populations' mean returns and its rows in one passage
+    (``hedge_{name}``, ``spread_text``), ``NOT_RUN`` until a genome of it has landed."""
+    genomes = [] if payload is None else payload.results.genomes
+    texts = {"hedge_status": _status(genomes, hedging_config("cpu"))}
+    card = claims.by_key(bet_hedging_rows(payload.results)) if genomes else {}
     for rho, name in SPREAD_NAMES.items():
         group = [g for g in genomes if g.rho_init == rho]
-        if not group:
-            continue
-        texts[f"hedge_{name}_sigma"] = f"{np.mean([g.sigma_trained for g in group]):.2g}"
-        mean_return = {
-            p: np.mean([np.mean(list(getattr(g.returns, p).values())) for g in group])
-            for p in POPULATIONS
-        }
-        texts[f"hedge_{name}_returns"] = (
-            f"{mean_return['individuals']:.0f} for the individuals, "
-            f"{mean_return['clones']:.0f} for the clones"
+        texts[f"hedge_{name}"] = spread_text(rho, group, card) if group else NOT_RUN
+    return texts
+
+
+def _status(genomes: list["HedgingGenome"], config: HedgingConfig) -> str:
+    """How far the design has come: each spread's genomes landed and the lineage's."""
+    planned = config.genomes()
+    if not genomes:
+        return (
+            f"not yet run: its {len(planned)} genomes ({len(config.seeds)} per spread and of "
+            "the lineage) train in the background queue"
         )
-        for row, (key, part) in keys.items():
-            found = [
+    landed = []
+    for rho in config.rho_inits:
+        group = [g for g in genomes if g.rho_init == rho]
+        who = "the lineage" if rho == DETERMINISTIC_RHO else f"rho from {rho:g}"
+        landed.append(f"{who} {len(group)} of {len(config.seeds)}")
+        if rho == DETERMINISTIC_RHO and group:
+            sigma = np.mean([g.sigma_trained for g in group])
+            home = np.mean([g.scale for g in group])
+            landed[-1] += f" (trained sigma {sigma:.1e}, home return {home:.0f})"
+    return f"genomes landed: {'; '.join(landed)}"
+
+
+ROW_PARTS = {  # a spread's rows in the order the chapter gives them: (claim, setting names)
+    "survival": ("ch6.hedging_survival", f"at least {PRIMARY[1]} survive"),
+    "lineage": ("ch6.hedging_lineage", ""),
+    "k10": ("ch6.hedging_survival", "at least 10 survive"),
+    "k50": ("ch6.hedging_survival", "at least 50 survive"),
+    "geometric": ("ch6.hedging_geometric", ""),
+}
+
+
+def spread_text(rho: float, group: list["HedgingGenome"], card: Card) -> str:
+    """One spread's passage: its trained sigma and mean returns over conditions, members
+    and genomes; the declared row (at least one survives, retested: individuals minus
+    clones) with the budget that would decide it; against the lineage; the secondary rows
+    (at least 10, at least 50, geometric-mean fitness). A row not yet computed (fewer than
+    two genomes) reads "not run"."""
+    mean_return = {
+        p: np.mean([np.mean(list(getattr(g.returns, p).values())) for g in group])
+        for p in POPULATIONS
+    }
+    said = {}
+    for part, (key, named) in ROW_PARTS.items():
+        row = next(
+            (
                 r
                 for r in card.get(key, [])
-                if r.setting.startswith(f"rho from {rho:g} ") and part in r.setting
-            ]
-            texts |= row_texts(f"hedge_{name}_{row}", found[0] if found else None)
-            if found and row == "survival":
-                texts["hedge_design"] = found[0].budget
-    return texts
+                if r.setting.startswith(f"rho from {rho:g} ") and named in r.setting
+            ),
+            None,
+        )
+        if row is None:
+            said[part] = "not run"
+            continue
+        found = row_texts("row", row)
+        said[part] = f"{found['row_ours']}, {found['row_verdict']}"
+        if part == "survival":
+            said[part] += f" (would decide: {found['row_decide']})"
+    return (
+        f"{len(group)} genomes, trained sigma {np.mean([g.sigma_trained for g in group]):.2g}; "
+        f"mean returns over the conditions {mean_return['individuals']:.0f} (individuals) and "
+        f"{mean_return['clones']:.0f} (clones). At least one survives, retested, individuals "
+        f"minus clones: {said['survival']}; against the lineage: {said['lineage']}. "
+        f"Secondary: at least 10, {said['k10']}; at least 50, {said['k50']}; "
+        f"geometric-mean fitness, {said['geometric']}"
+    )
 
 
 def evidence(records: Records) -> list[Row]:
