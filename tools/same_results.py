@@ -17,7 +17,16 @@ from pathlib import Path
 
 from sgb.provenance import SAME_RUN_FIELDS, read_results
 
-RUN_FIELDS = ("wall_time_s", "git_commit", "date", "train_steps_per_s", "env_steps_per_s")
+RUN_FIELDS = (
+    "wall_time_s",
+    "cpu_time_s",
+    "training_wall_time_s",
+    "training_cpu_time_s",
+    "git_commit",
+    "date",
+    "train_steps_per_s",
+    "env_steps_per_s",
+)
 
 
 def without_run_fields(value):
