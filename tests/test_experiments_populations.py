@@ -358,10 +358,14 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     assert texts["regime_pop_retest"].startswith("64 types seed 0: r = ")
     texts = population_runs.regime_populations(None)
     assert set(texts.values()) == {population_runs.NOT_RUN}
-    # a genome part-way that does not yet walk (mean return -7): a % of its return says
-    # nothing, so it adds no Figure 5 and no variability row; Figure 4E's r (scale-free) stays
+    # a genome part-way that does not yet walk (mean return about -7): a % of its return says
+    # nothing, so it adds no Figure 5 and no variability row; Figure 4E's r (scale-free)
+    # stays. Its individuals play nearly the same episodes' returns in another order: no
+    # reliability, so what would decide Figure 4E is their SD, in return units
+    episodes = rng.normal(-7, 20, 64)
     crawl = {
-        "sampled": rng.normal(-7, 20, (100, 64)),
+        "sampled": np.array([rng.permutation(episodes) for _ in range(100)])
+        + rng.normal(0, 1, (100, 64)),
         "long_legs_sampled": rng.normal(-11, 20, (100, 64)),
         "mean_network_sampled": rng.normal(-7, 20, (16, 1)),
     }
@@ -378,6 +382,8 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
         if "9.83 x 10^6 steps" in r.setting
     ]
     assert [r.key for r in added] == ["fig4e.r_legs"]
+    assert added[0].decide.startswith("individuals that differ: their SD is at most ")
+    assert added[0].decide.endswith(" (return units; the mean return, -6, is not positive)")
     # a 64-type genome part-way through its parts (ours come first, no sampled one yet)
     # is a valid file that adds no row
     genomes["k64_s2"] = {
@@ -395,5 +401,5 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     # 15 % of the return apart at the end, told apart only there
     course = population_runs.regime_populations(SimpleNamespace(results=results))
     early, late = course["regime_pop_training"].split("; after ")
-    assert early.startswith("64 types seed 0: after 9.83 x 10^6 steps, mean return -7")
+    assert early.startswith("64 types seed 0: after 9.83 x 10^6 steps, mean return -6")
     assert late.endswith("(individuals told apart only after 5 x 10^7 steps)")

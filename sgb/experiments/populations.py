@@ -801,7 +801,15 @@ def _protocol_rows(
     normal, long_legs = bodies.normal, bodies.long_legs
     reliabilities = [max(b.variance_split.reliability, 0.0) for b in (normal, long_legs)]
     legs = stored_test(bodies.legs.test)
-    bound = sd_below(_bound(normal))
+    if normal.mean_return > 0:
+        bound = sd_below(_bound(normal))
+    else:  # a % of a return that is not positive says nothing: in return units
+        split = normal.variance_split
+        most = between_sd_at(split.icc_ci[1], split.within_var)
+        bound = (
+            f"individuals that differ: their SD is at most {most:.2g} (return units; the mean "
+            f"return, {normal.mean_return:.0f}, is not positive)"
+        )
     rows.append(legs_row(setting, legs, math.sqrt(math.prod(reliabilities)), budget, bound))
     variability = variability_row(normal, setting, "title.variability.regime")
     return rows + ([variability] if variability else [])
