@@ -47,6 +47,11 @@ class Queue:
     runs: tuple[QueuedRun, ...]
 
 
+def known_sum(times: list[float | None]) -> float | None:
+    """The sum of ``times`` (s), or None where one of them was not recorded."""
+    return None if None in times else sum(times)
+
+
 def run_lock(results: Path, name: str) -> Path:
     """The path the lock of run ``name`` of the results file ``results`` is taken on, for
     a run whose result goes into that file (a cell of a sweep, a genome's population)."""

@@ -47,7 +47,7 @@ from sgb.paths import committed_results
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import NOT_RUN, Card, row_texts
 from sgb.provenance import git_commit, results_file
-from sgb.queued import Queue, QueuedRun
+from sgb.queued import Queue, QueuedRun, known_sum
 from sgb.recording import Recording, held_results, start
 from sgb.results import Records
 from sgb.resume import peek
@@ -299,8 +299,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
 def _cost(record: dict, key: str) -> float | None:
     """A genome's training and evaluation together, in ``key`` (``wall_time_s`` or
     ``cpu_time_s``); None where either was not recorded."""
-    parts = (record.get(f"training_{key}"), record.get(key))
-    return None if None in parts else sum(parts)
+    return known_sum([record.get(f"training_{key}"), record.get(key)])
 
 
 def hedging_config(profile: str) -> HedgingConfig:

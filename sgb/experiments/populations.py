@@ -73,7 +73,7 @@ from sgb.claims import (
 from sgb.profiles import PROFILE_NAMES, check_profile
 from sgb.prose import GENOMES, NOT_RUN, REGIME_STEPS, Card, regime_setting, row_of, row_texts
 from sgb.provenance import git_commit, read_results, results_file
-from sgb.queued import Queue, QueuedRun, run_lock
+from sgb.queued import Queue, QueuedRun, known_sum, run_lock
 from sgb.recording import Recording, start
 from sgb.reliability import between_sd_at, between_sd_bound, episodes_for, variance_split
 from sgb.results import Records
@@ -593,6 +593,7 @@ def queued(profile: str, results_dir: Path) -> Queue:
             "" if landed(genome, config, Path(results_dir)) else " (its training has not landed)"
         )
         lock = run_lock(path, label)
+        spent_cpu = known_sum([p.get("cpu_time_s") for p in done])
         runs.append(
             QueuedRun(
                 label=f"{_genome_name(genome.cell_types, genome.seed, steps)}{waits}",
@@ -603,18 +604,11 @@ def queued(profile: str, results_dir: Path) -> Queue:
                 wall_time_s=sum(p["wall_time_s"] for p in done) if done else None,
                 chunks_done=len(done),
                 spent_s=sum(p["wall_time_s"] for p in done),
-                cpu_time_s=_cpu_time(done) if done else None,
-                spent_cpu_s=_cpu_time(done),
+                cpu_time_s=spent_cpu if done else None,
+                spent_cpu_s=spent_cpu,
             )
         )
     return Queue(path, tuple(runs))
-
-
-def _cpu_time(parts: list[dict]) -> float | None:
-    """The CPU time (s) of a genome's evaluated ``parts``; None where one of them was
-    evaluated before parts recorded it."""
-    times = [p.get("cpu_time_s") for p in parts]
-    return None if None in times else sum(times)
 
 
 def _new_record(genome: Genome, j: int, config: PopulationsConfig, env: str) -> dict:
