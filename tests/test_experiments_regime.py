@@ -19,9 +19,21 @@ def test_the_regime_table_is_the_runs_of_its_file():
     assert table["final return"].tolist() == [r["final_return"] for r in regime["results"]["runs"]]
 
 
-def test_regime_without_sgb_arms_says_none():
+def test_regime_names_its_arms_by_genome_then_more_types_first_and_none_without_them():
     regime = RECORDS("regime").model_dump(exclude_unset=True)
     summary = regime["results"]["summary"]
+    sgb_arm = next(s for s in summary if s["cell_types"] is not None)
+    landed = ((16, "authors_aliased"), (16, "authors"), (64, "authors"), (32, "authors"))
+    regime["results"]["summary"] = [s for s in summary if s["cell_types"] is None] + [
+        {**sgb_arm, "cell_types": k, "genome": genome} for k, genome in landed
+    ]
+    arms = regime_runs.regime(regime_runs.Regime.model_validate(regime))["regime_sgb"]
+    assert [arm.split(":")[0] for arm in arms.split("; ")] == [
+        "64 types",
+        "32 types",
+        "16 types",
+        "16 types, pairs aliased",
+    ]
     regime["results"]["summary"] = [s for s in summary if s["cell_types"] is None]
     assert regime_runs.regime(regime_runs.Regime.model_validate(regime))["regime_sgb"] == "none"
 

@@ -258,7 +258,8 @@ def regime(payload: "Regime") -> dict[str, str]:
     final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
     on the authors' scale, its mean env-steps/s and wall time per run, the mean CPU time
     per run of any arm where recorded (``regime_*``),
-    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds, and the
+    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds (the
+    authors' genome first, more cell types first), and the
     scorecard's rows of the level at 128 types, the fall to 16 and the fall's shape with
     the authors' genome (``regime_level``, ``regime_fall``, ``regime_shape``: estimate,
     interval and verdict; "no row yet" while an arm they compare has fewer than two seeds)."""
@@ -280,7 +281,10 @@ def regime(payload: "Regime") -> dict[str, str]:
     mine = [r for r in runs if r.cell_types is None]
     n = len(vanilla.seeds)
     spread = "" if vanilla.sem_return is None else f" ± {vanilla.sem_return:.0f} (SEM)"
-    arms = [s for s in summary if s.cell_types is not None]
+    arms = sorted(
+        (s for s in summary if s.cell_types is not None),
+        key=lambda s: (s.genome != "authors", -s.cell_types),
+    )
     return {
         "regime_vanilla": f"{vanilla.mean_return:.0f}{spread} over {_seeds(n)}",
         "regime_steps": f"{mine[0].eval_steps[-1]:,}",
