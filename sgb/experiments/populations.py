@@ -891,13 +891,57 @@ def over_training(genomes: list["RegimePopulationGenome"]) -> str:
     return "; ".join(parts) if parts else NOT_RUN
 
 
+def told_apart(rows: list[Row]) -> str:
+    """Whether individuals of one genome differ at the paper's budget, counted from
+    ``regime_population_rows`` over the genomes that trained the whole run (pooled rows and
+    Figure 5's one-sample t, which takes the mean network's mean as exact, left out): per
+    protocol, the genomes whose SD between individuals has an interval above 0 (named, with
+    that SD in % of the return); Figure 4E's rows whose r lies above, or below, 0; Figure
+    5's rows whose individuals lie above, or below, their mean network. ``NOT_RUN`` without rows."""
+    finished = regime_runs.RUNS["cpu"].ppo.total_steps
+    mine = [r for r in rows if r.amount == finished and "genomes pooled" not in r.setting]
+    said = []
+    for actions, protocol in (("sampled", "the authors' protocol"), ("deterministic", "ours")):
+        each = [
+            r
+            for r in mine
+            if r.key == "title.variability.regime" and r.setting.endswith(f"{actions} actions")
+        ]
+        apart = [
+            f"{regime_setting(r).removesuffix(f', {actions} actions')}: {r.ours} % of the return"
+            for r in each
+            if r.test.low > 0
+        ]
+        if each:
+            said.append(
+                f"under {actions} actions ({protocol}) in {len(apart)} of {len(each)} genomes"
+                + (f" ({'; '.join(apart)})" if apart else "")
+            )
+    if not said:
+        return NOT_RUN
+    legs = [r for r in mine if r.key == "fig4e.r_legs"]
+    fig5 = [
+        r for r in mine if r.key == "fig5.population_beats_mean" and "one-sample" not in r.setting
+    ]
+    above = sum(r.test.low > 0 for r in fig5)
+    below = sum(r.test.high < 0 for r in fig5)
+    return (
+        f"individuals of one genome can be told apart {' and '.join(said)}. Figure 4E's r "
+        f"between the bodies lies above 0 in {sum(r.test.low > 0 for r in legs)} of "
+        f"{len(legs)} measurements (genome and protocol) and below 0 in "
+        f"{sum(r.test.high < 0 for r in legs)}; Figure 5's individuals lie above their mean "
+        f"network in {above} of {len(fig5)} and below it in {below}"
+    )
+
+
 def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     """Figures 4E and 5 on the genomes of the authors' regime
     (``rl/regime_populations_ant_cpu.json``): the design (``regime_pop_design``: the
     genomes measured of those the grid trains), the normal body's test-retest reliability
     under sampled actions (``regime_pop_retest``: the split-half r of each genome), the
-    variability of a genome measured part-way and at the end (``regime_pop_training``), and
-    each row of ``regime_population_rows``: Figure 4E (``regime_pop_legs``), Figure 5 by
+    variability of a genome measured part-way and at the end (``regime_pop_training``), the
+    answer counted over the genomes (``regime_pop_answer``, ``told_apart``), and each row of
+    ``regime_population_rows``: Figure 4E (``regime_pop_legs``), Figure 5 by
     Welch's t (``regime_pop_welch``) and paired under our protocol (``regime_pop_ours``);
     ``NOT_RUN`` for all without the file or a summary."""
     rows = [] if payload is None else regime_population_rows(payload.results)
@@ -925,6 +969,7 @@ def regime_populations(payload: "RegimePopulations | None") -> dict[str, str]:
     welch = [r for r in rows if "Welch" in r.setting]
     paired = [r for r in rows if "our protocol" in r.setting]
     return texts | {
+        "regime_pop_answer": told_apart(rows),
         "regime_pop_legs": _listed(rows, "fig4e.r_legs"),
         "regime_pop_welch": _listed(welch, "fig5.population_beats_mean"),
         "regime_pop_ours": _listed(paired, "fig5.population_beats_mean"),
