@@ -362,10 +362,10 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
         "individuals of one genome can be told apart under sampled actions (the authors' "
         f"protocol) in 2 of 2 genomes (64 types, seed 0: {variability[1].ours} % of the "
         f"return; 64 types, seed 1: {variability[2].ours} % of the return) and under "
-        f"deterministic actions (ours) in 1 of 1 genomes (64 types, seed 0: "
-        f"{variability[0].ours} % of the return). Figure 4E's r between the bodies lies above 0 in 3 of 3 measurements "
-        "(genome and protocol) and below 0 in 0; Figure 5's individuals lie above their "
-        "mean network in 1 of 3 and below it in 0"
+        "deterministic actions (ours) in 1 of 1 genomes (64 types, seed 0: "
+        f"{variability[0].ours} % of the return). Figure 4E's r between the bodies lies "
+        "above 0 in 3 of 3 measurements (genome and protocol) and below 0 in 0; Figure 5's "
+        "individuals lie above their mean network in 1 of 3 and below it in 0"
     )
     texts = population_runs.regime_populations(None)
     assert set(texts.values()) == {population_runs.NOT_RUN}

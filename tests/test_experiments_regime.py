@@ -108,3 +108,43 @@ def test_a_smoke_regime_records_each_sgb_runs_spreads_against_its_means(tmp_path
     texts = regime_runs.spreads(record)
     assert texts["regime_birth_sigma"].startswith(f"{float(genome.softplus(-7.0)):.2g} (rho -7")
     assert f"({1} runs, {len(sgb.layers)} layers)" in texts["regime_spreads"]
+
+
+def test_the_regime_sweep_draws_each_arms_mean_and_sem_over_seeds_and_vanillas_band():
+    """Figure 3C at the paper's budget on runs with known returns: vanilla's mean as a
+    line inside its SEM band, each SGB arm's mean with its SEM bar (none for one seed),
+    the aliased pairs hollow and beside their own count."""
+    import matplotlib
+
+    matplotlib.use("agg")
+    from sgb.plots import rl as figures
+
+    run = RECORDS("regime").results.runs[0]
+    made = {
+        (None, "authors"): [7000.0, 6900.0, 6800.0],
+        (128, "authors"): [7600.0, 6500.0, 6800.0],
+        (16, "authors"): [900.0, 500.0],
+        (16, "authors_aliased"): [400.0],
+    }
+    runs = [
+        run.model_copy(update={"cell_types": k, "genome": g, "seed": s, "final_return": r})
+        for (k, g), returns in made.items()
+        for s, r in enumerate(returns)
+    ]
+    ax = figures.plot_regime_sweep(runs)
+    (vanilla,) = [line for line in ax.lines if line.get_linestyle() == "--"]
+    assert vanilla.get_ydata()[0] == pytest.approx(6900.0)
+    (band,) = ax.patches
+    assert band.get_extents().height > 0
+    drawn = {}
+    for container in ax.containers:
+        data, _, bars = container.lines
+        (x,), (y,) = data.get_xdata(), data.get_ydata()
+        sem = float(np.ptp(bars[0].get_segments()[0][:, 1])) / 2 if bars else None
+        drawn[round(x, 2)] = (y, sem, data.get_markerfacecolor())
+    assert sorted(drawn) == [16, 17.92, 128]
+    assert drawn[128][:2] == pytest.approx(
+        (20900 / 3, np.std(made[128, "authors"], ddof=1) / 3**0.5)
+    )
+    assert drawn[16][:2] == pytest.approx((700.0, 200.0))
+    assert drawn[17.92][:2] == (400.0, None) and drawn[17.92][2] == "none"

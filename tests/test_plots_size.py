@@ -27,7 +27,7 @@ from sgb.plots import (
     theory,
     wiring,
 )
-from sgb.schemas import BenchBackendsResults
+from sgb.schemas import BenchBackendsResults, Training
 
 matplotlib.use("agg")
 
@@ -218,6 +218,14 @@ EVOLVED = EvolutionResults.model_validate(
     }
 )
 FRAMES = {name: np.zeros((40, 60, 3)) for name in ("normal", "long legs", "slippery")}
+REGIME_RUNS = [
+    Training.model_validate(
+        {"cell_types": k, "seed": seed, "final_return": r, "last_two_return": r}
+        | {"eval_steps": [0, 10**6, 2 * 10**6], "eval_returns": [-500.0, r / 2, r]}
+    )
+    for k, r in ((None, 7e3), (128, 7e3), (64, 5e3), (32, 3e3), (16, 500.0))
+    for seed in range(3)
+]
 
 # each figure function on synthetic data of its shape, drawn in its test
 FIGURES = {
@@ -233,6 +241,8 @@ FIGURES = {
     "beyond.plot_hedging": lambda: beyond.plot_hedging(HEDGING),
     "beyond.plot_evolution": lambda: beyond.plot_evolution(EVOLVED),
     "rl.plot_spread": lambda: rl.plot_spread(SPREAD),
+    "rl.plot_regime": lambda: rl.plot_regime(REGIME_RUNS),
+    "rl.plot_regime_sweep": lambda: rl.plot_regime_sweep(REGIME_RUNS),
     "rl.plot_backends": lambda: rl.plot_backends(BENCH),
     "rl.plot_mean_network": lambda: rl.plot_mean_network(
         RETURNS["normal"]["individuals"], RETURNS["normal"]["mean_network"]

@@ -69,32 +69,120 @@ def plot_sweep(summary: list[Record], env: str, seeds: list[dict] | None = None,
     return ax
 
 
-def plot_regime(runs: list[Training], env: str = "ant", ax=None):
-    """Learning curves under the authors' regime: the training-time evaluation (their
-    window return) against env steps, one line per run; the right axis is the authors'
-    Figure 3 scale, (R + 724) / (SOTA + 724)."""
-    ax = axes_or_new(ax)
-    for run in sorted(runs, key=lambda r: (r.cell_types is not None, r.cell_types or 0)):
-        vanilla = run.cell_types is None
-        color = PALETTE["baseline"] if vanilla else PALETTE["authors"]
-        name = "vanilla PPO" if vanilla else f"SGB, {run.cell_types} types"
-        ax.plot(
-            np.asarray(run.eval_steps) / 1e6,
-            run.eval_returns,
-            marker="o",
-            color=color,
-            ls="--" if vanilla else "-",
-            alpha=1.0 if run.seed == 0 else 0.5,
-            label=f"{name}, seed {run.seed}",
-        )
-    ax.set_xlabel("env steps (millions)")
-    ax.set_ylabel("window return (their evaluation)")
+def _arm(run: Training) -> tuple[int | None, str]:
+    """A regime run's arm: its cell types (``None`` for vanilla) and its genome."""
+    return run.cell_types, getattr(run, "genome", "authors")
+
+
+def _arm_label(cell_types: int | None, genome: str) -> str:
+    if cell_types is None:
+        return "vanilla PPO"
+    return f"SGB, {cell_types} types" + ("" if genome == "authors" else ", pairs aliased")
+
+
+def _arms(runs: list[Training]) -> dict[tuple[int | None, str], list[Training]]:
+    """The runs by arm: vanilla first, then more cell types first, the authors' genome
+    before its aliased ablation; each arm's runs by seed."""
+    arms: dict[tuple[int | None, str], list[Training]] = {}
+    for run in sorted(runs, key=lambda r: r.seed):
+        arms.setdefault(_arm(run), []).append(run)
+    return dict(sorted(arms.items(), key=lambda item: _arm_order(*item[0])))
+
+
+def _arm_order(cell_types: int | None, genome: str) -> tuple[bool, int, bool]:
+    return cell_types is not None, -(cell_types or 0), genome != "authors"
+
+
+def _arm_colours(runs: list[Training]) -> dict[int | None, tuple]:
+    """One colour per number of cell types (viridis short of its pale yellow, most types
+    darkest), vanilla grey."""
+    types = sorted({r.cell_types for r in runs if r.cell_types is not None}, reverse=True)
+    colours = dict(zip(types, sns.color_palette("viridis", len(types) + 1), strict=False))
+    return colours | {None: PALETTE["baseline"]}
+
+
+def _authors_axis(ax, env: str) -> None:
+    """The authors' Figure 3 scale, (R + 724) / (SOTA + 724), on ``ax``'s right."""
     low, high = FIG3_SCALE[env]
     right = ax.secondary_yaxis(
         "right", functions=(lambda r: (r - low) / (high - low), lambda f: low + f * (high - low))
     )
     right.set_ylabel("the authors' Figure 3 scale")
+
+
+def plot_regime(runs: list[Training], env: str = "ant", ax=None):
+    """Learning curves under the authors' regime: the training-time evaluation (their
+    window return) against env steps, one line per run, one colour per number of cell
+    types (vanilla grey and dashed, the aliased pairs dotted), one legend entry per arm;
+    the right axis is the authors' Figure 3 scale, (R + 724) / (SOTA + 724)."""
+    ax = axes_or_new(ax)
+    colours = _arm_colours(runs)
+    for (cell_types, genome), mine in _arms(runs).items():
+        style = "--" if cell_types is None else ("-" if genome == "authors" else ":")
+        label = f"{_arm_label(cell_types, genome)} ({len(mine)} seed{'s' * (len(mine) > 1)})"
+        for j, run in enumerate(mine):
+            ax.plot(
+                np.asarray(run.eval_steps) / 1e6,
+                run.eval_returns,
+                marker="o",
+                ms=3,
+                color=colours[cell_types],
+                ls=style,
+                alpha=0.85,
+                label=label if j == 0 else "_nolegend_",
+            )
+    ax.set_xlabel("env steps (millions)")
+    ax.set_ylabel("window return (their evaluation)")
+    _authors_axis(ax, env)
     ax.legend(fontsize=8)
+    return ax
+
+
+def plot_regime_sweep(runs: list[Training], env: str = "ant", ax=None):
+    """The paper's Figure 3C at its budget: each run's final return (its last evaluation)
+    against the number of cell types per hidden layer (log scale), a dot per seed and the
+    arm's mean with its SEM over seeds (no bar for one seed); the aliased pairs beside
+    their count; vanilla PPO's mean as a dashed line with its SEM as a band; the right
+    axis is the authors' Figure 3 scale."""
+    ax = axes_or_new(ax)
+    colours = _arm_colours(runs)
+    arms = _arms(runs)
+    for (cell_types, genome), mine in arms.items():
+        returns = np.array([r.final_return for r in mine])
+        sem = float(stats.sem(returns)) if len(returns) > 1 else 0.0
+        label = f"{_arm_label(cell_types, genome)} ({len(mine)} seed{'s' * (len(mine) > 1)})"
+        if cell_types is None:
+            ax.axhline(returns.mean(), color=colours[None], ls="--", label=label)
+            ax.axhspan(returns.mean() - sem, returns.mean() + sem, color=colours[None], alpha=0.15)
+            continue
+        x = cell_types * (1.0 if genome == "authors" else 1.12)
+        ax.scatter(
+            np.full(len(returns), x) * 2.0 ** (0.025 * (np.arange(len(returns)) - 1)),
+            returns,
+            s=12,
+            alpha=0.45,
+            color=colours[cell_types],
+            linewidths=0,
+        )
+        ax.errorbar(
+            x,
+            returns.mean(),
+            yerr=sem if len(returns) > 1 else None,
+            marker="o" if genome == "authors" else "s",
+            mfc=colours[cell_types] if genome == "authors" else "none",
+            capsize=3,
+            color=colours[cell_types],
+            ls="none",
+            label=label,
+        )
+    types = sorted({k for k, _ in arms if k is not None})
+    ax.set_xscale("log", base=2)
+    ax.set_xticks(types, [str(k) for k in types])
+    ax.minorticks_off()
+    ax.set_xlabel("cell types per hidden layer")
+    ax.set_ylabel("final window return")
+    _authors_axis(ax, env)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22), ncol=2, fontsize=8)
     return ax
 
 
