@@ -9,6 +9,7 @@ from sgb import genome
 from sgb.experiments import regime as regime_runs
 from sgb.provenance import read_results
 from sgb.rl import checkpoints
+from sgb.rl.regimes import authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR
 
 
@@ -148,3 +149,31 @@ def test_the_regime_sweep_draws_each_arms_mean_and_sem_over_seeds_and_vanillas_b
     )
     assert drawn[16][:2] == pytest.approx((700.0, 200.0))
     assert drawn[17.92][:2] == (400.0, None) and drawn[17.92][2] == "none"
+
+
+def test_the_sweep_table_gives_each_arm_on_both_scales_paired_with_its_seeds_vanilla():
+    """Runs with known returns: the fraction of vanilla pairs each run with the vanilla run
+    of its seed (a seed without one is left out of it), the authors' scale is the runs'
+    own, each mean ± SEM over seeds (the mean alone for one seed), arms in order."""
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
+    run = regime["results"]["runs"][0]
+    made = {
+        (16, "authors_aliased"): {0: 500.0},
+        (None, "authors"): {0: 8000.0, 1: 6000.0},
+        (16, "authors"): {0: 800.0, 1: 1200.0, 2: 300.0},
+    }
+    regime["results"]["runs"] = [
+        {**run, "cell_types": k, "genome": g, "seed": s, "final_return": r}
+        | {"authors_scale": authors_scale("ant", r)}
+        for (k, g), returns in made.items()
+        for s, r in returns.items()
+    ]
+    table = regime_runs.sweep_table(regime_runs.Regime.model_validate(regime))
+    assert table["arm"].tolist() == ["vanilla PPO", "16 types", "16 types, pairs aliased"]
+    assert table["seeds"].tolist() == ["0, 1", "0, 1, 2", "0"]
+    assert table["final return"].tolist() == ["7000 ± 1000", "767 ± 260", "500"]
+    # seed 0 and 1 of 16 types against their own vanilla: 0.1 and 0.2
+    assert table["fraction of vanilla"].tolist() == ["1.00 ± 0.00", "0.15 ± 0.05", "0.06"]
+    scale = [authors_scale("ant", r) for r in made[None, "authors"].values()]
+    sem = abs(scale[0] - scale[1]) / 2  # of two values
+    assert table["authors' scale"][0] == f"{np.mean(scale):.2f} ± {sem:.2f}"

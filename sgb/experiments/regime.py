@@ -42,7 +42,7 @@ from sgb.recording import Recording, start
 from sgb.results import Records
 from sgb.rl import checkpoints
 from sgb.rl.regime_runs import RUNS, finished_runs, kept_chunks, run_config, train_regime
-from sgb.rl.regimes import authors_scale
+from sgb.rl.regimes import arm_order, authors_scale
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, kept_state, seed_sem
 from sgb.schemas import (
     Count,
@@ -258,8 +258,8 @@ def regime(payload: "Regime") -> dict[str, str]:
     final return over seeds): vanilla's mean with its SEM and seeds, its env steps, its mean
     on the authors' scale, its mean env-steps/s and wall time per run, the mean CPU time
     per run of any arm where recorded (``regime_*``),
-    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds (the
-    authors' genome first, more cell types first), and the
+    ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds (in
+    ``arm_order``), and the
     scorecard's rows of the level at 128 types, the fall to 16 and the fall's shape with
     the authors' genome (``regime_level``, ``regime_fall``, ``regime_shape``: estimate,
     interval and verdict; "no row yet" while an arm they compare has fewer than two seeds)."""
@@ -283,7 +283,7 @@ def regime(payload: "Regime") -> dict[str, str]:
     spread = "" if vanilla.sem_return is None else f" ± {vanilla.sem_return:.0f} (SEM)"
     arms = sorted(
         (s for s in summary if s.cell_types is not None),
-        key=lambda s: (s.genome != "authors", -s.cell_types),
+        key=lambda s: arm_order(s.cell_types, s.genome),
     )
     return {
         "regime_vanilla": f"{vanilla.mean_return:.0f}{spread} over {_seeds(n)}",
@@ -334,6 +334,41 @@ def regime_table(payload: "Regime") -> pd.DataFrame:
     ``REGIME_COLUMNS`` maps the files' keys."""
     runs = pd.DataFrame([r.model_dump() for r in payload.results.runs])[list(REGIME_COLUMNS)]
     return runs.rename(columns=REGIME_COLUMNS)
+
+
+def _mean_sem(values: list[float], digits: int) -> str:
+    """``mean ± SEM`` over seeds, the mean alone for one seed."""
+    values = np.asarray(values)
+    sem = seed_sem(values)
+    return f"{values.mean():.{digits}f}" + ("" if np.isnan(sem) else f" ± {sem:.{digits}f}")
+
+
+def sweep_table(payload: "Regime") -> pd.DataFrame:
+    """Figure 3C at the paper's budget on both scales, one row per arm (in ``arm_order``):
+    its seeds, the mean final return, the mean fraction of the same seed's vanilla return
+    (the paper's text), and the mean on the authors' scale, (R + 724) / (8706 + 724) (their
+    code's plot), each ``mean ± SEM`` over seeds."""
+    runs = payload.results.runs
+    vanilla = {r.seed: r.final_return for r in runs if r.cell_types is None}
+    arms: dict[tuple[int | None, str], list[RegimeRun]] = {}
+    for run in sorted(runs, key=lambda r: r.seed):
+        arms.setdefault((run.cell_types, run.genome), []).append(run)
+    rows = []
+    for cell_types, genome in sorted(arms, key=lambda arm: arm_order(*arm)):
+        mine = arms[cell_types, genome]
+        paired = [r.final_return / vanilla[r.seed] for r in mine if r.seed in vanilla]
+        rows.append(
+            {
+                "arm": "vanilla PPO"
+                if cell_types is None
+                else f"{cell_types} types" + ("" if genome == "authors" else ", pairs aliased"),
+                "seeds": ", ".join(str(r.seed) for r in mine),
+                "final return": _mean_sem([r.final_return for r in mine], 0),
+                "fraction of vanilla": _mean_sem(paired, 2) if paired else "-",
+                "authors' scale": _mean_sem([r.authors_scale for r in mine], 2),
+            }
+        )
+    return pd.DataFrame(rows)
 
 
 class LayerSpread(Record):

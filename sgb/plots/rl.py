@@ -7,7 +7,7 @@ import seaborn as sns
 
 from sgb import stats
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
-from sgb.rl.regimes import FIG3_SCALE
+from sgb.rl.regimes import FIG3_SCALE, arm_order
 from sgb.schemas import BenchBackendsResults, Record, Training
 
 SETTINGS_STYLE = {
@@ -86,11 +86,7 @@ def _arms(runs: list[Training]) -> dict[tuple[int | None, str], list[Training]]:
     arms: dict[tuple[int | None, str], list[Training]] = {}
     for run in sorted(runs, key=lambda r: r.seed):
         arms.setdefault(_arm(run), []).append(run)
-    return dict(sorted(arms.items(), key=lambda item: _arm_order(*item[0])))
-
-
-def _arm_order(cell_types: int | None, genome: str) -> tuple[bool, int, bool]:
-    return cell_types is not None, -(cell_types or 0), genome != "authors"
+    return dict(sorted(arms.items(), key=lambda item: arm_order(*item[0])))
 
 
 def _arm_colours(runs: list[Training]) -> dict[int | None, tuple]:

@@ -113,3 +113,10 @@ def authors_scale(env: str, value: float) -> float:
     hard-coded SOTA (8706 on the Ant, 4838 on the HalfCheetah)."""
     low, high = FIG3_SCALE[validation.choice("env", env, tuple(FIG3_SCALE))]
     return (value - low) / (high - low)
+
+
+def arm_order(cell_types: int | None, genome: str = "authors") -> tuple[bool, int, bool]:
+    """Where a regime arm stands in every list and figure of it: vanilla (``cell_types``
+    ``None``) first, then more cell types first, the authors' genome before its ablation
+    (``genome``, e.g. their aliased pairs)."""
+    return cell_types is not None, -(cell_types or 0), genome != "authors"
