@@ -42,7 +42,7 @@ from sgb.recording import Recording, start
 from sgb.results import Records
 from sgb.rl import checkpoints
 from sgb.rl.regime_runs import RUNS, finished_runs, kept_chunks, run_config, train_regime
-from sgb.rl.regimes import arm_order, authors_scale
+from sgb.rl.regimes import arm_name, arm_order, authors_scale, by_arm
 from sgb.rl.runs import CHECKPOINT_DIR, finished_run, kept_state, seed_sem
 from sgb.schemas import (
     Count,
@@ -293,9 +293,8 @@ def regime(payload: "Regime") -> dict[str, str]:
         "regime_wall": f"{np.mean([r.wall_time_s for r in mine]) / 3600:.1f} h",
         "regime_cpu": _cpu_per_run(runs),
         "regime_sgb": "; ".join(
-            f"{s.cell_types} types"
-            + ("" if s.genome == "authors" else ", pairs aliased")
-            + f": {s.fraction_of_vanilla:.2f} of vanilla ({_seeds(len(s.seeds))})"
+            f"{arm_name(s.cell_types, s.genome)}: {s.fraction_of_vanilla:.2f} of vanilla "
+            f"({_seeds(len(s.seeds))})"
             for s in arms
         )
         or "none",
@@ -350,18 +349,12 @@ def sweep_table(payload: "Regime") -> pd.DataFrame:
     code's plot), each ``mean ± SEM`` over seeds."""
     runs = payload.results.runs
     vanilla = {r.seed: r.final_return for r in runs if r.cell_types is None}
-    arms: dict[tuple[int | None, str], list[RegimeRun]] = {}
-    for run in sorted(runs, key=lambda r: r.seed):
-        arms.setdefault((run.cell_types, run.genome), []).append(run)
     rows = []
-    for cell_types, genome in sorted(arms, key=lambda arm: arm_order(*arm)):
-        mine = arms[cell_types, genome]
+    for (cell_types, genome), mine in by_arm(runs).items():
         paired = [r.final_return / vanilla[r.seed] for r in mine if r.seed in vanilla]
         rows.append(
             {
-                "arm": "vanilla PPO"
-                if cell_types is None
-                else f"{cell_types} types" + ("" if genome == "authors" else ", pairs aliased"),
+                "arm": arm_name(cell_types, genome),
                 "seeds": ", ".join(str(r.seed) for r in mine),
                 "final return": _mean_sem([r.final_return for r in mine], 0),
                 "fraction of vanilla": _mean_sem(paired, 2) if paired else "-",

@@ -7,7 +7,7 @@ import seaborn as sns
 
 from sgb import stats
 from sgb.plots import PALETTE, WIDTH, axes_or_new, panels
-from sgb.rl.regimes import FIG3_SCALE, arm_order
+from sgb.rl.regimes import FIG3_SCALE, arm_name, by_arm
 from sgb.schemas import BenchBackendsResults, Record, Training
 
 SETTINGS_STYLE = {
@@ -69,24 +69,8 @@ def plot_sweep(summary: list[Record], env: str, seeds: list[dict] | None = None,
     return ax
 
 
-def _arm(run: Training) -> tuple[int | None, str]:
-    """A regime run's arm: its cell types (``None`` for vanilla) and its genome."""
-    return run.cell_types, getattr(run, "genome", "authors")
-
-
 def _arm_label(cell_types: int | None, genome: str) -> str:
-    if cell_types is None:
-        return "vanilla PPO"
-    return f"SGB, {cell_types} types" + ("" if genome == "authors" else ", pairs aliased")
-
-
-def _arms(runs: list[Training]) -> dict[tuple[int | None, str], list[Training]]:
-    """The runs by arm: vanilla first, then more cell types first, the authors' genome
-    before its aliased ablation; each arm's runs by seed."""
-    arms: dict[tuple[int | None, str], list[Training]] = {}
-    for run in sorted(runs, key=lambda r: r.seed):
-        arms.setdefault(_arm(run), []).append(run)
-    return dict(sorted(arms.items(), key=lambda item: arm_order(*item[0])))
+    return ("" if cell_types is None else "SGB, ") + arm_name(cell_types, genome)
 
 
 def _arm_colours(runs: list[Training]) -> dict[int | None, tuple]:
@@ -113,7 +97,7 @@ def plot_regime(runs: list[Training], env: str = "ant", ax=None):
     the right axis is the authors' Figure 3 scale, (R + 724) / (SOTA + 724)."""
     ax = axes_or_new(ax)
     colours = _arm_colours(runs)
-    for (cell_types, genome), mine in _arms(runs).items():
+    for (cell_types, genome), mine in by_arm(runs).items():
         style = "--" if cell_types is None else ("-" if genome == "authors" else ":")
         label = f"{_arm_label(cell_types, genome)} ({len(mine)} seed{'s' * (len(mine) > 1)})"
         for j, run in enumerate(mine):
@@ -142,7 +126,7 @@ def plot_regime_sweep(runs: list[Training], env: str = "ant", ax=None):
     axis is the authors' Figure 3 scale."""
     ax = axes_or_new(ax)
     colours = _arm_colours(runs)
-    arms = _arms(runs)
+    arms = by_arm(runs)
     for (cell_types, genome), mine in arms.items():
         returns = np.array([r.final_return for r in mine])
         sem = float(stats.sem(returns)) if len(returns) > 1 else 0.0

@@ -120,3 +120,20 @@ def arm_order(cell_types: int | None, genome: str = "authors") -> tuple[bool, in
     ``None``) first, then more cell types first, the authors' genome before its ablation
     (``genome``, e.g. their aliased pairs)."""
     return cell_types is not None, -(cell_types or 0), genome != "authors"
+
+
+def by_arm(runs: list) -> dict[tuple[int | None, str], list]:
+    """Regime runs by arm, (cell types or ``None`` for vanilla, genome), in ``arm_order``;
+    each arm's runs by seed. A run without a ``genome`` is the authors'."""
+    arms: dict[tuple[int | None, str], list] = {}
+    for run in sorted(runs, key=lambda r: r.seed):
+        arms.setdefault((run.cell_types, getattr(run, "genome", "authors")), []).append(run)
+    return dict(sorted(arms.items(), key=lambda item: arm_order(*item[0])))
+
+
+def arm_name(cell_types: int | None, genome: str = "authors") -> str:
+    """A regime arm in the book's words: ``vanilla PPO``, ``128 types``, ``16 types,
+    pairs aliased``."""
+    if cell_types is None:
+        return "vanilla PPO"
+    return f"{cell_types} types" + ("" if genome == "authors" else ", pairs aliased")
