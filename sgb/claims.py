@@ -15,7 +15,7 @@ contradiction and to size the budget is stated in the row (``Row.basis``).
 
 import math
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -734,6 +734,18 @@ def room_above_floor(returns: np.ndarray, scale: float, who: str) -> Room:
     )
 
 
+def figure3_setting(
+    env: str,
+    settings: str,
+    settings_labels: Mapping[str, str],
+    ablations: Mapping[str, str] | None = None,
+) -> str:
+    """The setting a Figure 3 row of ``settings`` names (see ``figure3_rows``)."""
+    label = f"{env}, {settings_labels[settings]}"
+    source = (ablations or {}).get(settings, settings)
+    return label if source == settings else f"{label} (128 types: {settings_labels[source]})"
+
+
 def figure3_rows(
     runs: Sequence[Training],
     env: str,
@@ -743,6 +755,7 @@ def figure3_rows(
     key_infix: str = "",
     settings_of: Callable[[Training], str] = lambda r: r.settings,
     on_authors_scale: Callable[[float], float] | None = None,
+    ablations: Mapping[str, str] | None = None,
 ) -> list[Row]:
     """Figure 3C/D's level at 128 types, fall near 16 and the fall's shape (the drop from 32
     to 16 types less the drop from 128 to 32, a contrast of the three arms), per genome
@@ -750,7 +763,8 @@ def figure3_rows(
     vanilla return (each run scored by ``score``); keys ``fig3.level_128.{key_infix}{env}``,
     ``fig3.fall_16...`` and ``fig3.shape_32...``. With ``on_authors_scale`` (a return to
     the authors' Figure 3 scale), the budget says where vanilla stands on it: how far the
-    runs have learned."""
+    runs have learned. ``ablations``: settings trained at 16 types alone, each mapped to
+    the settings whose 128-type runs its fall starts from; they have a fall row only."""
     vanilla = run_returns(runs, "ours", None, score, settings_of)
     scale = vanilla.mean() if vanilla.size else math.nan
     budget_of = f"{steps / 1e6:g}M steps, seeds: vanilla {vanilla.size}"
@@ -760,13 +774,14 @@ def figure3_rows(
     for settings in dict.fromkeys(settings_of(r) for r in runs if r.cell_types is not None):
         if settings not in settings_labels:
             continue
+        source = (ablations or {}).get(settings, settings)  # whose 128-type runs the fall leaves
         top, bottom = (
-            run_returns(runs, settings, 128, score, settings_of),
+            run_returns(runs, source, 128, score, settings_of),
             run_returns(runs, settings, 16, score, settings_of),
         )
-        label = f"{env}, {settings_labels[settings]}"
+        label = figure3_setting(env, settings, settings_labels, ablations)
         budget = f"{budget_of}, 128 types {top.size}, 16 types {bottom.size}"
-        if min(top.size, vanilla.size) >= 2:  # the level compares these two arms
+        if source == settings and min(top.size, vanilla.size) >= 2:  # the level's two arms
             rows.append(
                 judge(
                     f"fig3.level_128.{key_infix}{env}",
@@ -788,7 +803,7 @@ def figure3_rows(
                 )
             )
         middle = run_returns(runs, settings, 32, score, settings_of)
-        if min(top.size, middle.size, bottom.size) >= 2 and vanilla.size:
+        if source == settings and min(top.size, middle.size, bottom.size) >= 2 and vanilla.size:
             arms = [top / scale, middle / scale, bottom / scale]
             rows.append(
                 judge(

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from committed import RECORDS, raw
 
-from sgb import genome
+from sgb import claims, genome
 from sgb.experiments import regime as regime_runs
 from sgb.provenance import read_results
 from sgb.rl import checkpoints
@@ -177,3 +177,33 @@ def test_the_sweep_table_gives_each_arm_on_both_scales_paired_with_its_seeds_van
     scale = [authors_scale("ant", r) for r in made[None, "authors"].values()]
     sem = abs(scale[0] - scale[1]) / 2  # of two values
     assert table["authors' scale"][0] == f"{np.mean(scale):.2f} ± {sem:.2f}"
+
+
+def test_their_aliased_pairs_fall_from_the_per_pair_128_types_and_are_set_against_its_16():
+    """Two aliased 16-type runs 600 and 900 above the per-pair 16-type mean: the aliased
+    fall leaves the per-pair 128-type arm (no level or shape row of its own), and the
+    aliasing text is their difference at 16 types, in fractions of vanilla."""
+    regime = RECORDS("regime").model_dump(exclude_unset=True)
+    runs = regime["results"]["runs"]
+    k16 = [r for r in runs if r["cell_types"] == 16 and r["genome"] == "authors"]
+    base = np.mean([r["final_return"] for r in k16])
+    aliased = [
+        {**k16[seed], "genome": "authors_aliased", "final_return": base + extra}
+        for seed, extra in ((0, 600.0), (1, 900.0))
+    ]
+    both = {**regime, "results": {**regime["results"], "runs": runs + aliased}}
+    both = regime_runs.Regime.model_validate(both)
+    steps = regime["provenance"]["config"]["ppo"]["total_steps"]
+    setting = claims.figure3_setting(
+        "ant", "authors_aliased", claims.REGIME_SETTINGS, regime_runs.ABLATIONS
+    )
+    mine = [r for r in regime_runs.regime_rows(both.results.runs, steps) if r.setting == setting]
+    (fall,) = mine
+    assert fall.key == "fig3.fall_16.regime.ant" and "128 types: the authors'" in setting
+    vanilla = np.mean([r["final_return"] for r in runs if r["cell_types"] is None])
+    top = np.mean([r["final_return"] for r in runs if r["cell_types"] == 128])
+    assert fall.test.estimate == pytest.approx((top - base - 750.0) / vanilla)
+    texts = regime_runs.regime(both)
+    assert texts["regime_fall_aliased"] == f"{fall.ours}, **{fall.verdict}**"
+    assert texts["regime_aliasing"].startswith(f"{750.0 / vanilla:+.2f} [")
+    assert "seeds: aliased 2, per pair 3" in texts["regime_aliasing"]

@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from sgb import claims, resume
+from sgb import claims, resume, stats
+from sgb.book import p_text
 from sgb.claims import REGIME_SETTINGS, Row, figure3_rows, trained_steps
 from sgb.genome import of_params, sigma, softplus
 from sgb.profiles import check_profile
@@ -222,12 +223,16 @@ def summarise_regime(runs: list[dict]) -> list[dict]:
 PROFILES = RUNS
 
 
+# The ablation trained at 16 types alone -> the genome whose 128-type runs its fall leaves.
+ABLATIONS = {"authors_aliased": "authors"}
+
+
 def regime_rows(runs: list["RegimeRun"], steps: int) -> list[Row]:
-    """Figure 3C at the paper's budget (``sgb.experiments.regime``): the level at 128 types
-    and the fall to 16 under the authors' regime, each run scored by its last evaluation
-    (the authors' window on all 2,048 training environments); per genome (their Gaussian
-    per pair, and their aliased pairs). A row appears once the two arms it compares have
-    two seeds each."""
+    """Figure 3C at the paper's budget (``sgb.experiments.regime``): the level at 128 types,
+    the fall to 16 and its shape under the authors' regime, each run scored by its last
+    evaluation (the authors' window on all 2,048 training environments); with their
+    Gaussian per pair, and the fall from its 128 types to their aliased pairs at 16
+    (``ABLATIONS``). A row appears once the arms it compares have two seeds each."""
     return figure3_rows(
         runs,
         "ant",
@@ -237,6 +242,26 @@ def regime_rows(runs: list["RegimeRun"], steps: int) -> list[Row]:
         key_infix="regime.",
         settings_of=lambda r: r.genome,
         on_authors_scale=functools.partial(authors_scale, "ant"),
+        ablations=ABLATIONS,
+    )
+
+
+def aliasing(runs: list["RegimeRun"]) -> str:
+    """What their aliased pairs do at 16 types: the aliased arm's mean final return less
+    the per-pair Gaussian's, in fractions of vanilla's mean, with Welch's 95 % interval
+    and p; "not yet" while either arm has fewer than two seeds."""
+
+    def returns(genome: str, k: int | None) -> np.ndarray:
+        return claims.run_returns(runs, genome, k, "final_return", lambda r: r.genome)
+
+    aliased, per_pair = returns("authors_aliased", 16), returns("authors", 16)
+    if min(aliased.size, per_pair.size) < 2:
+        return f"not yet (seeds: aliased {aliased.size}, per pair {per_pair.size}; two each needed)"
+    scale = returns("ours", None).mean()  # vanilla's
+    t = stats.welch(aliased / scale, per_pair / scale)
+    return (
+        f"{t.estimate:+.2f} [{t.low:+.2f}, {t.high:+.2f}] of vanilla (Welch, p = {p_text(t.p)}; "
+        f"seeds: aliased {aliased.size}, per pair {per_pair.size})"
     )
 
 
@@ -261,16 +286,18 @@ def regime(payload: "Regime") -> dict[str, str]:
     ``regime_sgb``: each SGB arm's mean as a fraction of vanilla's, with its seeds (in
     ``arm_order``), and the
     scorecard's rows of the level at 128 types, the fall to 16 and the fall's shape with
-    the authors' genome (``regime_level``, ``regime_fall``, ``regime_shape``: estimate,
-    interval and verdict; "no row yet" while an arm they compare has fewer than two seeds)."""
+    the authors' genome, and the fall to their aliased pairs (``regime_level``,
+    ``regime_fall``, ``regime_shape``, ``regime_fall_aliased``: estimate, interval and
+    verdict; "no row yet" while an arm they compare has fewer than two seeds), and what
+    the aliasing does at 16 types (``regime_aliasing``, ``aliasing``)."""
     runs, summary = payload.results.runs, payload.results.summary
     card = claims.by_key(regime_rows(runs, trained_steps(payload)))
-    genome = claims.REGIME_SETTINGS["authors"]
     texts = {}
-    for name, stem in claims.FIG3_KEYS.items():
-        row = next(
-            (r for r in card.get(f"{stem}.regime.ant", []) if r.setting.endswith(genome)), None
-        )
+    fig3 = [(name, stem, "authors") for name, stem in claims.FIG3_KEYS.items()]
+    aliased = ("fall_aliased", claims.FIG3_KEYS["fall"], "authors_aliased")
+    for name, stem, genome in [*fig3, aliased]:
+        setting = claims.figure3_setting("ant", genome, REGIME_SETTINGS, ABLATIONS)
+        row = next((r for r in card.get(f"{stem}.regime.ant", []) if r.setting == setting), None)
         found = row_texts("row", row)
         texts[f"regime_{name}"] = (
             "no row yet (an arm it compares has fewer than two seeds)"
@@ -292,6 +319,7 @@ def regime(payload: "Regime") -> dict[str, str]:
         "regime_speed": f"{np.mean([r.train_steps_per_s for r in mine]):,.0f}",
         "regime_wall": f"{np.mean([r.wall_time_s for r in mine]) / 3600:.1f} h",
         "regime_cpu": _cpu_per_run(runs),
+        "regime_aliasing": aliasing(runs),
         "regime_sgb": "; ".join(
             f"{arm_name(s.cell_types, s.genome)}: {s.fraction_of_vanilla:.2f} of vanilla "
             f"({_seeds(len(s.seeds))})"
