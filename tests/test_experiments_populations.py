@@ -414,3 +414,15 @@ def test_regime_population_rows_tell_the_two_protocols_apart():
     early, late = course["regime_pop_training"].split("; after ")
     assert early.startswith("64 types seed 0: after 9.83 x 10^6 steps, mean return -6")
     assert late.endswith("(individuals told apart only after 5 x 10^7 steps)")
+
+
+def test_genomes_pooled_only_where_their_sds_differ():
+    """Two genomes whose individuals cannot be told apart (SD between 0 each) give no
+    pooled row, where a t over genomes is undefined; two that differ give the mean."""
+    rows = population_runs.pooled_variability_rows(
+        "title.variability.regime",
+        {("alike", 100, 64, None): [0.0, 0.0], ("apart", 100, 64, None): [0.5, 1.5]},
+    )
+    (row,) = rows
+    assert row.setting.startswith("apart, 2 genomes pooled")
+    assert row.test.estimate == pytest.approx(1.0)

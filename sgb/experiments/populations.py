@@ -815,11 +815,13 @@ def pooled_variability_rows(
     """The title's claim (``key``) per setting over its genomes, the genome the unit: the
     mean of their SDs between individuals (% of the return) with its one-sample t
     interval over genomes, against about 1 %. ``groups``: (setting, individuals,
-    episodes, steps the genomes trained or ``None``) -> each genome's SD; a group of one
-    genome is left out."""
+    episodes, steps the genomes trained or ``None``) -> each genome's SD. A group of one
+    genome is left out, and so is one whose genomes' SDs are all equal (all 0 where every
+    genome's ICC estimate lies below 0): it has no spread over genomes to test, and its
+    genomes' own rows stand."""
     rows = []
     for (setting, n, episodes, steps), sds in groups.items():
-        if len(sds) < 2:
+        if len(sds) < 2 or np.ptp(sds) == 0:
             continue
         pooled = f"{setting}, {len(sds)} genomes pooled (the genome the unit)"
         budget = f"{len(sds)} genomes x {n} individuals x {episodes} episodes"
