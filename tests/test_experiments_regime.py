@@ -67,7 +67,8 @@ def test_the_regime_texts_carry_its_rows_once_two_seeds_per_arm_land():
 
 def test_a_runs_sigma_course_is_its_recorded_kernels_and_the_chapter_says_its_change():
     """Evaluations that recorded no spreads and the biases are left out; the committed
-    64-type seed-0 run recorded all 11, from softplus(rho) near 0.0009 at step 0 down."""
+    64-type seed-0 run recorded all 11, from softplus(rho) near 0.0009 at step 0 down;
+    each run is named by its arm, the aliased pairs apart from the per-pair 16 types."""
     regime = RECORDS("regime").model_dump(exclude_unset=True)
     run = next(r for r in regime["results"]["runs"] if r["cell_types"] is not None)
     sigmas = [
@@ -89,6 +90,10 @@ def test_a_runs_sigma_course_is_its_recorded_kernels_and_the_chapter_says_its_ch
     change = f"({sigma[-1].mean() / sigma[0].mean() - 1:+.0%})"
     text = regime_runs.sigma_courses(committed)["regime_sigma_course"]
     assert f"64 types seed 0, {sigma[0].mean():.2g} at step 0 to " in text and change in text
+    courses = regime_runs.sigma_courses_by_run(committed)
+    aliased = [r for r in committed.results.runs if r.genome == "authors_aliased"]
+    assert {f"16 types, pairs aliased seed {r.seed}" for r in aliased} <= set(courses)
+    assert text.count("; ") + 1 == len(courses) and all(name in text for name in courses)
 
 
 def test_a_smoke_regime_records_each_sgb_runs_spreads_against_its_means(tmp_path):

@@ -13,15 +13,16 @@ from sgb.rl.regime_runs import RUNS
 
 
 def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
-    """Vanilla first, then the most cell types to the fewest; a run below the walking
-    speed is not counted as walking; the table's return is 1000 steps' reward over the
-    episodes per environment."""
+    """Vanilla first, then the most cell types to the fewest, their aliased pairs an arm
+    of their own after the per-pair arm; a run below the walking speed is not counted as
+    walking; the table names each run's arm, and its return is 1000 steps' reward over
+    the episodes per environment."""
 
-    def run(k, seed, speed, episodes=1.0):
+    def run(k, seed, speed, episodes=1.0, genome="authors"):
         walked = {"cell_types": k, "seed": seed, "forward_velocity": speed, "walks": speed >= 1}
         reward = speed + 1.0 - 0.5  # forward reward, upright, control cost
         return walked | {
-            "genome": "authors",
+            "genome": genome,
             "window_return": 1000 * reward / episodes,
             "forward_velocity_sem": 0.1,
             "episodes_per_env": episodes,
@@ -29,18 +30,23 @@ def test_the_gait_texts_list_each_arms_speeds_and_count_the_walkers():
             "control_cost": 0.5,
         }
 
-    runs = [run(16, 0, 0.4), run(None, 1, 7.0), run(128, 0, 8.0, 1.5), run(None, 0, 7.5)]
+    aliased = run(16, 0, 0.1, 1.2, genome="authors_aliased")
+    runs = [run(16, 0, 0.4), aliased, run(None, 1, 7.0), run(128, 0, 8.0, 1.5), run(None, 0, 7.5)]
     results = regime_gait.RegimeGaitResults.model_validate({"walking_speed": 1.0, "runs": runs})
     texts = regime_gait.regime_gait(results)
     assert texts["gait_runs"] == (
-        "vanilla 7.50, 7.00 m/s (seeds 0, 1); 128 types 8.00 m/s (seed 0); "
-        "16 types 0.40 m/s (seed 0)"
+        "vanilla PPO 7.50, 7.00 m/s (seeds 0, 1); 128 types 8.00 m/s (seed 0); "
+        "16 types 0.40 m/s (seed 0); 16 types, pairs aliased 0.10 m/s (seed 0)"
     )
-    assert texts["gait_walks"] == "3 of the 4 runs walk (at least 1 m/s)"
+    assert texts["gait_walks"] == "3 of the 5 runs walk (at least 1 m/s)"
     assert texts["gait_episodes"] == (
-        "vanilla 1.00, 1.00 (seeds 0, 1); 128 types 1.50 (seed 0); 16 types 1.00 (seed 0)"
+        "vanilla PPO 1.00, 1.00 (seeds 0, 1); 128 types 1.50 (seed 0); 16 types 1.00 "
+        "(seed 0); 16 types, pairs aliased 1.20 (seed 0)"
     )
     table = regime_gait.gait_table(SimpleNamespace(results=results))
+    assert table.loc[table["forward speed (m/s)"] == 0.1, "arm"].tolist() == [
+        "16 types, pairs aliased"
+    ]
     made_of = 1000 * table["reward per step"] / table["episodes per environment"]
     assert table["window return"].tolist() == pytest.approx(made_of.tolist())
     assert set(regime_gait.regime_gait(None).values()) == {prose.NOT_RUN}

@@ -173,19 +173,27 @@ def sigma_course(run: "RegimeRun") -> tuple[np.ndarray, np.ndarray, list[str]] |
     return steps, np.array([[d[name] for name in names] for _, d in kept]), names
 
 
+def sigma_courses_by_run(payload: "Regime") -> dict[str, tuple]:
+    """Each SGB run's recorded course of its spreads (``sigma_course``), by the run's name
+    (``16 types, pairs aliased seed 2``), in the file's order; runs that recorded fewer
+    than two evaluations are left out."""
+    return {
+        f"{arm_name(run.cell_types, run.genome)} seed {run.seed}": course
+        for run in payload.results.runs
+        if run.cell_types is not None and (course := sigma_course(run)) is not None
+    }
+
+
 def sigma_courses(payload: "Regime") -> dict[str, str]:
     """How the spreads moved over training (``regime_sigma_course``), per SGB run that
-    recorded them (``sigma_course``): its kernels' mean sigma at its first recorded
-    evaluation and at its last, and the change; ``NOT_RUN`` where no run recorded two."""
+    recorded them (``sigma_courses_by_run``): its kernels' mean sigma at its first
+    recorded evaluation and at its last, and the change; ``NOT_RUN`` where no run
+    recorded two."""
     found = []
-    for run in payload.results.runs:
-        course = sigma_course(run) if run.cell_types is not None else None
-        if course is None:
-            continue
-        steps, sigma, _ = course
-        first, last = sigma[0].mean(), sigma[-1].mean()
+    for name, (steps, sigmas, _) in sigma_courses_by_run(payload).items():
+        first, last = sigmas[0].mean(), sigmas[-1].mean()
         found.append(
-            f"{run.cell_types} types seed {run.seed}, {first:.2g} at {_millions(steps[0])} to "
+            f"{name}, {first:.2g} at {_millions(steps[0])} to "
             f"{last:.2g} at {_millions(steps[-1])} ({last / first - 1:+.0%})"
         )
     return {"regime_sigma_course": "; ".join(found) or NOT_RUN}

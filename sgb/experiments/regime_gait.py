@@ -35,6 +35,7 @@ from sgb.results import Records
 from sgb.rl import checkpoints
 from sgb.rl.ppo import PPOConfig
 from sgb.rl.regime_runs import RUNS, RegimeRun, run_config
+from sgb.rl.regimes import arm_name, by_arm
 from sgb.rl.runs import CHECKPOINT_DIR, checkpoint_root, finished_run
 from sgb.rl.trainer import make_trainer
 from sgb.schemas import (
@@ -188,20 +189,18 @@ def regime_gait(results: "RegimeGaitResults | None") -> dict[str, str]:
 
 
 def _by_arm(runs: list["GaitRun"], value: Callable[["GaitRun"], float], unit: str) -> str:
-    """Each arm's runs' ``value`` by seed, vanilla first, then from the most cell types to
-    the fewest: e.g. ``vanilla 7.39, 7.32 m/s (seeds 0, 1); 16 types 1.23 m/s (seed 0)``."""
+    """Each arm's runs' ``value`` by seed, in ``sgb.rl.regimes.arm_order``: e.g.
+    ``vanilla PPO 7.39, 7.32 m/s (seeds 0, 1); 16 types 1.23 m/s (seed 0)``."""
     arms = []
-    for k in sorted({r.cell_types for r in runs}, key=lambda k: (k is not None, -(k or 0))):
-        mine = sorted((r for r in runs if r.cell_types == k), key=lambda r: r.seed)
+    for (cell_types, genome), mine in by_arm(runs).items():
         values = ", ".join(f"{value(r):.2f}" for r in mine)
         seeds = ", ".join(str(r.seed) for r in mine)
         which = f"seed{'s' * (len(mine) > 1)} {seeds}"
-        arms.append(f"{'vanilla' if k is None else f'{k} types'} {values}{unit} ({which})")
+        arms.append(f"{arm_name(cell_types, genome)} {values}{unit} ({which})")
     return "; ".join(arms)
 
 
 GAIT_COLUMNS = {
-    "cell_types": "cell types",
     "seed": "seed",
     "window_return": "window return",
     "forward_velocity": "forward speed (m/s)",
@@ -212,11 +211,14 @@ GAIT_COLUMNS = {
 
 
 def gait_table(payload: "RegimeGait") -> pd.DataFrame:
-    """The regime's gaits, one row per run: what its window return is made of (the
-    return is 1000 x the reward per step / the episodes per environment); columns named
-    as ``GAIT_COLUMNS`` maps the file's keys."""
-    runs = pd.DataFrame([r.model_dump() for r in payload.results.runs])[list(GAIT_COLUMNS)]
-    return runs.rename(columns=GAIT_COLUMNS)
+    """The regime's gaits, one row per run, arm by arm (``sgb.rl.regimes.by_arm``): what
+    its window return is made of (the return is 1000 x the reward per step / the episodes
+    per environment); its arm, then columns named as ``GAIT_COLUMNS`` maps the file's
+    keys."""
+    arms = by_arm(payload.results.runs).items()
+    rows = [{"arm": arm_name(*arm)} | r.model_dump() for arm, mine in arms for r in mine]
+    table = pd.DataFrame(rows)[["arm", *GAIT_COLUMNS]]
+    return table.rename(columns=GAIT_COLUMNS)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
