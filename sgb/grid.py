@@ -269,6 +269,16 @@ def _spent(run: QueuedRun) -> str:
     return f"{_hours(run.wall_time_s)}{cpu}"
 
 
+def _into_chunk(run: QueuedRun) -> float:
+    """Seconds a running run has spent on its current chunk: since its lock was taken or
+    its state last written, whichever came later (0 where neither is known)."""
+    marks = [runlock.taken_at(run.checkpoint)]
+    if run.state.exists():
+        marks.append(run.state.stat().st_mtime)
+    known = [t for t in marks if t is not None]
+    return max(time.time() - max(known), 0.0) if known else 0.0
+
+
 def describe(queue: Queue) -> list[str]:
     """A line per run of ``queue``: done (its wall time), running (its process, chunk and
     ETA), or waiting (where it resumes), and a summary line."""
@@ -277,8 +287,7 @@ def describe(queue: Queue) -> list[str]:
     for r in queue.runs:
         chunk = 0 if r.finished else r.chunks_done
         pid = None if r.finished else runlock.holder(r.checkpoint)
-        # a running run is into its current chunk since its state was last written
-        into = time.time() - r.state.stat().st_mtime if pid and r.state.exists() else 0.0
+        into = _into_chunk(r) if pid else 0.0
         into_chunks.append(into)
         if r.finished:
             what = f"done ({_spent(r)})" if r.wall_time_s else "done"

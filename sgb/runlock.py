@@ -8,7 +8,8 @@ system releases a lock when its process ends, killed or not, so a run left by a 
 process is free for the next one to resume.
 
 ``holder(path)`` says which process holds the lock of ``path``, without taking it (from
-Linux's ``/proc/locks``), so that a listing of a sweep cannot take a run from a worker.
+Linux's ``/proc/locks``), so that a listing of a sweep cannot take a run from a worker;
+``taken_at(path)`` when the lock was last taken.
 
 ``path`` is a ``str`` or an ``os.PathLike``, anything else a ``TypeError``. Locks do not
 nest: taking the lock of a path inside a ``with`` block that holds it (``claim`` or
@@ -52,6 +53,7 @@ def _locked(path: str | os.PathLike, blocking: bool) -> Iterator[bool]:
         except BlockingIOError:
             yield False
             return
+        os.utime(fd)  # the lock file's mtime: when the lock was last taken (``taken_at``)
         _held_files().add(identity)
         try:
             yield True
@@ -96,3 +98,13 @@ def holder(path: str | os.PathLike) -> int | None:
             if fields[5] == inode:
                 return int(fields[4])
     return None
+
+
+def taken_at(path: str | os.PathLike) -> float | None:
+    """When the lock of ``path`` was last taken (s since the epoch: its lock file's mtime),
+    ``None`` if it never was."""
+    lock = Path(f"{os.fspath(validation.path('path', path))}.lock")
+    try:
+        return lock.stat().st_mtime
+    except OSError:
+        return None

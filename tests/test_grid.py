@@ -8,6 +8,7 @@ import shutil
 import subprocess
 import sys
 import textwrap
+import time
 from dataclasses import replace
 from pathlib import Path
 
@@ -143,6 +144,30 @@ def test_the_progress_table_counts_runs_and_times_the_rest_by_their_pace(tmp_pat
     )
     assert grid.time_left_s(halved) == pytest.approx(grid.time_left_s(timed) / 2)
     assert grid.describe(halved)[0] == "  one: done (1.0 h; CPU 30 min)"
+
+
+def test_a_running_run_is_timed_from_when_its_lock_was_taken(tmp_path):
+    """A one-chunk run with no state file (a cell whose result goes into the results file),
+    held for 200 s of a typical 600: 400 s left, not the whole 600; the same for a chunked
+    run whose state was written before the lock was taken (a resumed run)."""
+    from sgb.queued import Queue, QueuedRun
+
+    done = QueuedRun("done", tmp_path / "done", tmp_path / "done.state", 1, True, 600.0)
+    cell = QueuedRun("cell", tmp_path / "cell", tmp_path / "cell.state", 1, False)
+    resumed = QueuedRun(
+        "resumed", tmp_path / "res", tmp_path / "res.state", 2, False, None, 1, 600.0
+    )
+    resumed.state.write_bytes(b"state after chunk 1")
+    now = time.time()
+    os.utime(resumed.state, (now - 3600, now - 3600))
+    with runlock.claim(cell.checkpoint) as mine, runlock.claim(resumed.checkpoint) as theirs:
+        assert mine and theirs
+        for run in (cell, resumed):
+            os.utime(f"{run.checkpoint}.lock", (now - 200, now - 200))
+        lines = grid.describe(Queue(tmp_path / "a.json", (done, cell, resumed)))
+    pid = os.getpid()
+    assert lines[1] == f"  cell: running (pid {pid}): chunk 1 of 1, ETA 7 min"
+    assert lines[2] == f"  resumed: running (pid {pid}): chunk 2 of 2, ETA 7 min"
 
 
 def _curve(results: Path, name: str) -> tuple[list[float], list[np.ndarray]]:
