@@ -18,7 +18,7 @@ def test_the_full_budget_dgb_table_and_records_read_the_same_cells():
     """Every cell is a row of the table; the finished ones (all the configured rounds) are
     Figure 2 records, with the table's accuracy, compression and nominal ratio."""
     payload = raw("dgb_full_fashion-mnist_cpu.json")
-    table = dgb_full.dgb_full_table(RECORDS("dgb_full"))
+    table = dgb_full.dgb_full_table(RECORDS("dgb_full").results)
     assert len(table) == len(payload["results"]["cells"])
     rounds = payload["provenance"]["config"]["dgb"]["rounds"]
     finished = table[table["rounds"] == rounds].set_index(["target ratio", "seed"])

@@ -20,6 +20,7 @@ from sgb.experiments import (
     sgb_full,
 )
 from sgb.experiments import sgb_full as sgb_full_runs
+from sgb.prose import NOT_RUN
 from sgb.provenance import read_results
 
 
@@ -262,7 +263,7 @@ def test_the_kl_share_row_weighs_the_kls_effect_against_the_dgbs_whole_lead():
 
 def test_the_full_budget_sgb_table_averages_each_setting_over_its_cells():
     payload = raw("sgb_full_fashion-mnist_cpu.json")
-    table = sgb_full.sgb_full_table(RECORDS("sgb_full"))
+    table = sgb_full.sgb_full_table(RECORDS("sgb_full").results)
     cells = list(payload["results"]["cells"].values())
     assert table["seeds"].sum() == len(cells)
     for _, row in table.iterrows():
@@ -342,8 +343,8 @@ def test_the_high_end_text_reads_each_width_of_the_dgb_high_file():
     """The text of Figure 2's high end names each width of ``dgb_high``'s file with its
     nominal ratio and its finished seeds' mean accuracy, as the file's table has them."""
     payload = RECORDS("dgb_high")
-    table = dgb_full_runs.dgb_full_table(payload)
-    text = sgb_full_runs.high_end(payload, {})["high_dgb"]
+    table = dgb_full_runs.dgb_full_table(payload.results)
+    text = sgb_full_runs.high_end(payload, None, {})["high_dgb"]
     rounds = payload.provenance.config.dgb.rounds
     for width, cells in table.groupby("g-net width"):
         done = cells[cells["rounds"] == rounds]
@@ -351,3 +352,20 @@ def test_the_high_end_text_reads_each_width_of_the_dgb_high_file():
         assert f"width {width}: nominally {nominal:,.0f}x" in text
         assert f"{done['test accuracy %'].mean():.1f}" in text
         assert f"over {len(done)} seeds" in text
+
+
+def test_the_high_end_text_reads_each_number_of_hidden_types_of_the_sgb_high_file():
+    """The SGB's high end names each number of hidden types of ``sgb_high``'s file with both
+    counts of its compression and its seeds' mean accuracy, as the file's table has them."""
+    high = RECORDS("sgb_high")
+    text = sgb_full_runs.high_end(None, high, {})["high_sgb"]
+    table = sgb_full.sgb_full_table(high.results)
+    assert len(table) == len({c.setting for c in high.results.cells.values()}) > 0
+    for _, row in table.iterrows():
+        ours, authors = row["compression (ours)"], row["compression (authors')"]
+        assert (
+            f"{row['hidden types']:g} hidden types: {ours:.0f}x ours, {authors:,.0f}x the "
+            f"authors', {row['individuals %']:.1f} ± "
+        ) in text
+        assert f"over {row['seeds']} seeds" in text
+    assert sgb_full_runs.high_end(None, None, {})["high_sgb"] == NOT_RUN

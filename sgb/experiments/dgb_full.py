@@ -225,8 +225,9 @@ def _write(recording: Recording, results: dict) -> Path:
     return recording.write(results, seeds, parts=[c for cell in cells for c in cell["records"]])
 
 
-def dgb_full_table(payload: "DgbFull") -> pd.DataFrame:
-    """Figure 2's DGB at the authors' budget (``sgb.experiments.dgb_full``), one row per
+def dgb_full_table(results: "DgbFullResults") -> pd.DataFrame:
+    """Figure 2's DGB at the authors' budget (``sgb.experiments.dgb_full``'s results, or
+    those pooled with ``dgb_high``'s: ``sgb_full.pooled``), one row per
     cell: target ratio, seed, g-net width, compression under both conventions beside the
     paper's nominal ratio for that width, rounds trained and the test accuracy (%) of the
     network of best validation accuracy so far."""
@@ -241,7 +242,7 @@ def dgb_full_table(payload: "DgbFull") -> pd.DataFrame:
             "rounds": c.records[-1].rounds if c.records else 0,
             "test accuracy %": 100 * c.records[-1].test_accuracy if c.records else float("nan"),
         }
-        for c in payload.results.cells.values()
+        for c in results.cells.values()
     ).sort_values(["target ratio", "seed"], ignore_index=True)
 
 

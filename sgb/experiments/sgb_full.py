@@ -602,14 +602,33 @@ def declines(card: Card) -> dict[str, str]:
     )
 
 
-def high_end(dgb_high: ResultsFile | None, card: Card) -> dict[str, str]:
-    """Figure 2's high end as the paper's axis counts it (``dgb_high``'s cells): per target
-    ratio the DGB's g-net width, its compression under the paper's nominal count, ours and
-    the authors', and its test accuracy, mean ± SEM over its finished seeds (``high_dgb``);
-    and the scorecard row of the authors' SGB against it at the cells nearest the paper's
-    nominal 1,500x (``high1500_*``, ``row_texts``)."""
+def _over_seeds(accuracies: list[float]) -> str:
+    """Test accuracies (%) as "mean ± SEM % over n seeds" (no SEM for one seed)."""
+    spread = f" ± {stats.sem(np.array(accuracies)):.1f}" if len(accuracies) > 1 else ""
+    return f"{np.mean(accuracies):.1f}{spread} % over {len(accuracies)} seeds"
+
+
+def high_end(
+    dgb_high: ResultsFile | None, sgb_high: ResultsFile | None, card: Card
+) -> dict[str, str]:
+    """Figure 2's high end as the paper's axis counts it: per target ratio of ``dgb_high``
+    the DGB's g-net width, its compression under the paper's nominal count, ours and the
+    authors', and its test accuracy, mean ± SEM over its finished seeds (``high_dgb``);
+    per number of hidden types of ``sgb_high`` the SGB's compression both ways and the
+    same (``high_sgb``); and the scorecard row of the authors' SGB against the DGB at the
+    cells nearest the paper's nominal 1,500x (``high1500_*``, ``row_texts``)."""
+    parts = []
+    cells = sgb_high.results.cells.values() if sgb_high is not None else []
+    for k in sorted({c.setting for c in cells}):
+        mine = [c for c in cells if c.setting == k]
+        parts.append(
+            f"{k:g} hidden types: {mine[0].compression:.0f}x ours, "
+            f"{mine[0].compression_authors:,.0f}x the authors', "
+            + _over_seeds([100 * c.accuracy for c in mine])
+        )
+    out = {"high_sgb": "; ".join(parts) or NOT_RUN}
     if dgb_high is None:
-        return {"high_dgb": NOT_RUN} | row_texts("high1500", None)
+        return out | {"high_dgb": NOT_RUN} | row_texts("high1500", None)
     config = dgb_high.provenance.config
     finished = figure2_records(dgb_high.results, config.dgb.rounds)
     parts = []
@@ -619,17 +638,16 @@ def high_end(dgb_high: ResultsFile | None, card: Card) -> dict[str, str]:
         if not mine or not done:
             continue
         cell = mine[0]
-        spread = f" ± {stats.sem(np.array(done)):.1f}" if len(done) > 1 else ""
         parts.append(
             f"width {cell.gnet_width}: nominally {cell.nominal_ratio:,.0f}x, "
             f"{cell.compression_ours:.0f}x ours, {cell.compression_authors:.0f}x the authors', "
-            f"{np.mean(done):.1f}{spread} % over {len(done)} seeds"
+            + _over_seeds(done)
         )
     cells = dgb_high.results.cells.values()
     target = min(cells, key=lambda c: abs(np.log(c.nominal_ratio / 1500))).ratio
     authors = SGB_VARIANTS["authors"]
     row = row_of(card, "fig2.full.sgb_better_high", f"(target {target:g}x), the SGB ({authors})")
-    return {"high_dgb": "; ".join(parts) or NOT_RUN} | row_texts("high1500", row)
+    return out | {"high_dgb": "; ".join(parts) or NOT_RUN} | row_texts("high1500", row)
 
 
 def texts(records: Records, card: Card) -> dict[str, str]:
@@ -637,16 +655,17 @@ def texts(records: Records, card: Card) -> dict[str, str]:
     return (
         sgb_full(records("sgb_full"))
         | figure2_full(records("dgb_full"), card)
-        | high_end(records.get("dgb_high"), card)
+        | high_end(records.get("dgb_high"), records.get("sgb_high"), card)
         | supervised_population(card)
         | kl_share(card)
         | declines(card)
     )
 
 
-def sgb_full_table(payload: "SgbFull") -> pd.DataFrame:
-    """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``),
-    one row per variant and number of hidden types, over the seeds finished: compression
+def sgb_full_table(results: "SgbFullResults") -> pd.DataFrame:
+    """Figure 2's SGB as the paper and the authors train it (``sgb.experiments.sgb_full``'s
+    results, or those ``pooled`` with ``sgb_high``'s), one row per variant and number of
+    hidden types, over the seeds finished: compression
     under both conventions, the seeds, the test accuracy (%) of the individuals (mean over
     seeds of each seed's mean, and its SD over seeds, in points) and of the mean network, the
     trained sigma of each layer (its synapses' mean, mean over seeds)."""
@@ -661,7 +680,7 @@ def sgb_full_table(payload: "SgbFull") -> pd.DataFrame:
             "mean network %": 100 * r.mean_network,
             **{f"sigma, layer {i}": layer.mean_sigma for i, layer in enumerate(r.layers)},
         }
-        for r in payload.results.cells.values()
+        for r in results.cells.values()
     )
     sigmas = [c for c in cells.columns if c.startswith("sigma")]
     how = {
