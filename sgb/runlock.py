@@ -36,11 +36,16 @@ def _held_files() -> set[tuple[int, int]]:
     return _held.files
 
 
+def _lock_file(path: str | os.PathLike) -> Path:
+    """The lock file of ``path``: ``path`` + ``.lock``."""
+    return Path(f"{os.fspath(validation.path('path', path))}.lock")
+
+
 @contextmanager
 def _locked(path: str | os.PathLike, blocking: bool) -> Iterator[bool]:
     """Open the lock file of ``path`` and ``flock`` it; yield whether it is held. A
     ``RuntimeError`` if this thread holds it already."""
-    lock = Path(f"{os.fspath(validation.path('path', path))}.lock")
+    lock = _lock_file(path)
     lock.parent.mkdir(parents=True, exist_ok=True)
     fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
     try:
@@ -84,7 +89,7 @@ PROC_LOCKS = Path("/proc/locks")
 def holder(path: str | os.PathLike) -> int | None:
     """The process id holding the lock of ``path`` (``claim``, ``exclusive``), ``None`` if
     none does or this system has no ``/proc/locks``; takes no lock itself."""
-    lock = Path(f"{os.fspath(validation.path('path', path))}.lock")
+    lock = _lock_file(path)
     try:
         stat = lock.stat()
         table = PROC_LOCKS.read_text()
@@ -103,7 +108,7 @@ def holder(path: str | os.PathLike) -> int | None:
 def taken_at(path: str | os.PathLike) -> float | None:
     """When the lock of ``path`` was last taken (s since the epoch: its lock file's mtime),
     ``None`` if it never was."""
-    lock = Path(f"{os.fspath(validation.path('path', path))}.lock")
+    lock = _lock_file(path)
     try:
         return lock.stat().st_mtime
     except OSError:

@@ -344,7 +344,7 @@ def test_the_high_end_text_reads_each_width_of_the_dgb_high_file():
     nominal ratio and its finished seeds' mean accuracy, as the file's table has them."""
     payload = RECORDS("dgb_high")
     table = dgb_full_runs.dgb_full_table(payload.results)
-    text = sgb_full_runs.high_end(payload, None, {})["high_dgb"]
+    text = sgb_full_runs.high_end(payload, {})["high_dgb"]
     rounds = payload.provenance.config.dgb.rounds
     for width, cells in table.groupby("g-net width"):
         done = cells[cells["rounds"] == rounds]
@@ -358,7 +358,7 @@ def test_the_high_end_text_reads_each_number_of_hidden_types_of_the_sgb_high_fil
     """The SGB's high end names each number of hidden types of ``sgb_high``'s file with both
     counts of its compression and its seeds' mean accuracy, as the file's table has them."""
     high = RECORDS("sgb_high")
-    text = sgb_full_runs.high_end(None, high, {})["high_sgb"]
+    text = sgb_full_runs.high_sgb(high)["high_sgb"]
     table = sgb_full.sgb_full_table(high.results)
     assert len(table) == len({c.setting for c in high.results.cells.values()}) > 0
     for _, row in table.iterrows():
@@ -368,4 +368,4 @@ def test_the_high_end_text_reads_each_number_of_hidden_types_of_the_sgb_high_fil
             f"authors', {row['individuals %']:.1f} ± "
         ) in text
         assert f"over {row['seeds']} seeds" in text
-    assert sgb_full_runs.high_end(None, None, {})["high_sgb"] == NOT_RUN
+    assert sgb_full_runs.high_sgb(None)["high_sgb"] == NOT_RUN
